@@ -1,0 +1,106 @@
+"""The occupancy grid every planner consumes, in the convention of ``nav_msgs/OccupancyGrid``.
+
+``data[iy, ix]`` holds 0..100 (occupancy probability in percent) or −1 (unknown). Row ``iy = 0`` is the
+*bottom* of the map (y = origin y), i.e. the image read by the loader is flipped so that rows grow with
+y (REP-103). Cell (ix, iy) covers [ox + ix·res, ox + (ix+1)·res) × [oy + iy·res, oy + (iy+1)·res).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from planner.errors import MapError
+
+OCCUPIED = 100
+FREE = 0
+UNKNOWN = -1
+
+
+@dataclass(frozen=True, eq=False)
+class OccupancyGrid:
+    """A 2-D occupancy grid in the ``map`` frame.
+
+    Parameters
+    ----------
+    data : int8 array (height, width); 0..100 or −1, row 0 at the bottom.
+    resolution_m : cell side in metres (> 0).
+    origin : (x, y, yaw) of the lower-left corner of cell (0, 0) in metres / radians.
+    occupied_threshold : a cell with ``data >= occupied_threshold`` blocks the robot (percent).
+    name : label used in results and plots.
+    source : free-form metadata from the file it came from (YAML fields), kept for round-trips.
+    """
+
+    data: np.ndarray
+    resolution_m: float
+    origin: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    occupied_threshold: int = 65
+    name: str = "map"
+    source: dict[str, Any] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        if not (math.isfinite(self.resolution_m) and self.resolution_m > 0):
+            raise MapError("resolution", f"must be a finite number > 0, got {self.resolution_m!r}")
+        if self.data.ndim != 2 or self.data.size == 0:
+            raise MapError("image", f"must be a non-empty 2-D grid, got shape {self.data.shape}")
+        if len(self.origin) != 3 or not all(math.isfinite(v) for v in self.origin):
+            raise MapError("origin", f"must be three finite numbers [x, y, yaw], got {self.origin!r}")
+
+    @classmethod
+    def from_occupied(
+        cls, occupied: np.ndarray, resolution_m: float, origin: tuple[float, float, float] = (0.0, 0.0, 0.0),
+        name: str = "map",
+    ) -> OccupancyGrid:
+        """Build a grid from a boolean array (row 0 at the bottom): True = occupied, False = free."""
+        data = np.where(np.asarray(occupied, dtype=bool), OCCUPIED, FREE).astype(np.int8)
+        return cls(data=data, resolution_m=float(resolution_m), origin=origin, name=name)
+
+    @property
+    def height(self) -> int:
+        return int(self.data.shape[0])
+
+    @property
+    def width(self) -> int:
+        return int(self.data.shape[1])
+
+    @property
+    def size_m(self) -> tuple[float, float]:
+        return self.width * self.resolution_m, self.height * self.resolution_m
+
+    def blocked(self, allow_unknown: bool = False) -> np.ndarray:
+        """Boolean (height, width) array: True where the robot may not be (occupied, or unknown unless allowed)."""
+        occ = self.data >= self.occupied_threshold
+        if not allow_unknown:
+            occ = occ | (self.data < 0)
+        return occ
+
+    def world_to_cell(self, x: float, y: float) -> tuple[int, int]:
+        """(ix, iy) of the cell containing world point (x, y); may lie outside the grid."""
+        return (
+            math.floor((x - self.origin[0]) / self.resolution_m),
+            math.floor((y - self.origin[1]) / self.resolution_m),
+        )
+
+    def cell_center(self, ix: int, iy: int) -> tuple[float, float]:
+        return (
+            self.origin[0] + (ix + 0.5) * self.resolution_m,
+            self.origin[1] + (iy + 0.5) * self.resolution_m,
+        )
+
+    def contains(self, x: float, y: float) -> bool:
+        ix, iy = self.world_to_cell(x, y)
+        return 0 <= ix < self.width and 0 <= iy < self.height
+
+    def metadata(self) -> dict[str, Any]:
+        """Map metadata as results and ``GET /v1/maps/{name}`` report it."""
+        return {
+            "name": self.name,
+            "resolution_m": self.resolution_m,
+            "width": self.width,
+            "height": self.height,
+            "origin": list(self.origin),
+            "size_m": list(self.size_m),
+        }

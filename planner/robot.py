@@ -1,0 +1,236 @@
+"""Robot profiles: the physical data the planners, simulator and drivers share.
+
+A profile is a TOML file (built-ins live in ``planner/robots/``; ``load_robot(path)`` reads a user's own).
+It gives the shell radius, roll and speed limits, the footprint used for collision checking, and the
+roll→curvature model that steers the sphere:
+
+* ``kinematic`` — paper 001 eq. 1: yaw rate = v·tan φ / r, i.e. curvature κ(φ) = tan φ / r.
+* ``calibrated`` — a table of measured (roll, turning radius) pairs (paper 000 §5: 5°, 10°, 15° →
+  circle diameters 2.6, 2.0, 1.7 m). Curvature is interpolated monotonically (PCHIP) through (0, 0) and
+  the measured points; beyond the last measured roll the curvature is held at the last measured value
+  (the model does not extrapolate what was never measured). Negative rolls mirror positive ones.
+
+Extra sections (``[vpip]``, ``[texplor]``, ``[spherobot]``, ``[sim]``) are kept verbatim in
+``RobotProfile.extra`` for the modules that need them.
+"""
+
+from __future__ import annotations
+
+import math
+import tomllib
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from importlib import resources
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from scipy.interpolate import PchipInterpolator
+
+from planner.errors import NotFound, RobotProfileError
+
+DEFAULT_ROBOT = "zju-60"
+
+
+@dataclass(frozen=True)
+class RollModel:
+    """Map between roll angle φ (rad, > 0 turns left) and signed path curvature κ (1/m).
+
+    ``kind`` is ``"kinematic"`` (κ = tan φ / r) or ``"calibrated"`` (table of |φ| → turning radius).
+    """
+
+    kind: str
+    radius_m: float
+    table_roll_rad: tuple[float, ...] = ()
+    table_radius_m: tuple[float, ...] = ()
+
+    def __post_init__(self) -> None:
+        if self.kind not in ("kinematic", "calibrated"):
+            raise RobotProfileError("roll_model.kind", f"must be 'kinematic' or 'calibrated', got {self.kind!r}")
+        if self.kind == "calibrated":
+            rolls = np.asarray(self.table_roll_rad, dtype=float)
+            radii = np.asarray(self.table_radius_m, dtype=float)
+            if rolls.size < 1 or rolls.size != radii.size:
+                raise RobotProfileError(
+                    "roll_model.table", "needs at least one (roll, radius) pair and equal-length columns"
+                )
+            if np.any(rolls <= 0) or np.any(np.diff(rolls) <= 0):
+                raise RobotProfileError("roll_model.table", "rolls must be positive and strictly increasing")
+            if np.any(radii <= 0) or np.any(np.diff(1.0 / radii) <= 0):
+                raise RobotProfileError(
+                    "roll_model.table", "radii must be positive and shrink as roll grows (curvature increasing)"
+                )
+
+    def _pchip(self) -> PchipInterpolator:
+        rolls = np.concatenate([[0.0], np.asarray(self.table_roll_rad, float)])
+        kappa = np.concatenate([[0.0], 1.0 / np.asarray(self.table_radius_m, float)])
+        return PchipInterpolator(rolls, kappa, extrapolate=False)
+
+    @property
+    def max_table_roll_rad(self) -> float:
+        return float(self.table_roll_rad[-1]) if self.kind == "calibrated" else math.pi / 2
+
+    def curvature(self, roll_rad: float | np.ndarray) -> np.ndarray | float:
+        """Signed curvature κ (1/m) produced by holding roll ``roll_rad``."""
+        phi = np.asarray(roll_rad, dtype=float)
+        if self.kind == "kinematic":
+            out = np.tan(phi) / self.radius_m
+        else:
+            mag = np.minimum(np.abs(phi), self.max_table_roll_rad)
+            out = np.sign(phi) * self._pchip()(mag)
+        return float(out) if out.ndim == 0 else out
+
+    def roll_for_curvature(self, curvature: float | np.ndarray) -> np.ndarray | float:
+        """Inverse of :meth:`curvature`: the roll (rad) that produces curvature κ (1/m).
+
+        For the calibrated model a curvature beyond the table's last point returns that point's roll.
+        """
+        k = np.asarray(curvature, dtype=float)
+        if self.kind == "kinematic":
+            out = np.arctan(k * self.radius_m)
+        else:
+            grid = np.linspace(0.0, self.max_table_roll_rad, 2001)
+            kap = self._pchip()(grid)
+            mag = np.interp(np.abs(k), kap, grid)
+            out = np.sign(k) * mag
+        return float(out) if out.ndim == 0 else out
+
+    def turning_radius(self, roll_rad: float) -> float:
+        """Turning radius (m) at roll ``roll_rad``; ``inf`` when upright."""
+        k = abs(float(self.curvature(roll_rad)))
+        return math.inf if k == 0 else 1.0 / k
+
+
+@dataclass(frozen=True)
+class RobotProfile:
+    """Everything the planners need to know about one robot (SI units, radians)."""
+
+    name: str
+    radius_m: float
+    max_roll_rad: float
+    max_roll_rate_rad_s: float
+    roll_time_constant_s: float
+    max_speed_m_s: float
+    max_accel_m_s2: float
+    footprint_length_m: float
+    footprint_width_m: float
+    roll_model: RollModel
+    description: str = ""
+    extra: Mapping[str, Any] = field(default_factory=dict)
+
+    @property
+    def max_curvature(self) -> float:
+        """Largest curvature (1/m) the robot can hold, at ``max_roll_rad``."""
+        return abs(float(self.roll_model.curvature(self.max_roll_rad)))
+
+    @property
+    def min_turning_radius_m(self) -> float:
+        return 1.0 / self.max_curvature
+
+    def to_json(self) -> dict[str, Any]:
+        """The profile as the result JSON carries it (DESIGN.md: ``robot``)."""
+        model: dict[str, Any] = {"kind": self.roll_model.kind}
+        if self.roll_model.kind == "calibrated":
+            model["roll_rad"] = list(self.roll_model.table_roll_rad)
+            model["radius_m"] = list(self.roll_model.table_radius_m)
+        return {
+            "name": self.name,
+            "radius_m": self.radius_m,
+            "max_roll_rad": self.max_roll_rad,
+            "max_roll_rate_rad_s": self.max_roll_rate_rad_s,
+            "max_speed_m_s": self.max_speed_m_s,
+            "footprint_length_m": self.footprint_length_m,
+            "footprint_width_m": self.footprint_width_m,
+            "min_turning_radius_m": self.min_turning_radius_m,
+            "roll_model": model,
+        }
+
+
+def _positive(data: Mapping[str, Any], key: str, where: str) -> float:
+    if key not in data:
+        raise RobotProfileError(f"{where}{key}", "is required")
+    value = data[key]
+    if isinstance(value, bool) or not isinstance(value, int | float):
+        raise RobotProfileError(f"{where}{key}", f"must be a number, got {value!r}")
+    value = float(value)
+    if not math.isfinite(value) or value <= 0:
+        raise RobotProfileError(f"{where}{key}", f"must be a finite number > 0, got {value!r}")
+    return value
+
+
+def profile_from_dict(data: Mapping[str, Any], default_name: str = "custom") -> RobotProfile:
+    """Build a :class:`RobotProfile` from parsed TOML. Angles in the file are in degrees (``*_deg``)."""
+    name = str(data.get("name", default_name))
+    radius = _positive(data, "radius_m", "")
+    max_roll = math.radians(_positive(data, "max_roll_deg", ""))
+    if max_roll >= math.radians(60):
+        raise RobotProfileError("max_roll_deg", "must be below 60 degrees")
+    model_data = data.get("roll_model", {"kind": "kinematic"})
+    if not isinstance(model_data, Mapping):
+        raise RobotProfileError("roll_model", "must be a table")
+    kind = str(model_data.get("kind", "kinematic"))
+    if kind == "calibrated":
+        rolls = model_data.get("roll_deg")
+        diam = model_data.get("diameter_m")
+        if not isinstance(rolls, list) or not isinstance(diam, list):
+            raise RobotProfileError("roll_model", "a calibrated model needs lists roll_deg and diameter_m")
+        model = RollModel(
+            kind,
+            radius,
+            tuple(math.radians(float(a)) for a in rolls),
+            tuple(float(d) / 2.0 for d in diam),
+        )
+    else:
+        model = RollModel(kind, radius)
+    known = {
+        "name", "description", "radius_m", "max_roll_deg", "max_roll_rate_deg_s", "roll_time_constant_s",
+        "max_speed_m_s", "max_accel_m_s2", "footprint_length_m", "footprint_width_m", "roll_model",
+    }
+    extra = {k: v for k, v in data.items() if k not in known}
+    for key, value in extra.items():
+        if not isinstance(value, Mapping):
+            raise RobotProfileError(key, "unknown field (extra sections must be tables such as [vpip])")
+    return RobotProfile(
+        name=name,
+        radius_m=radius,
+        max_roll_rad=max_roll,
+        max_roll_rate_rad_s=math.radians(_positive(data, "max_roll_rate_deg_s", "")),
+        roll_time_constant_s=_positive(data, "roll_time_constant_s", ""),
+        max_speed_m_s=_positive(data, "max_speed_m_s", ""),
+        max_accel_m_s2=_positive(data, "max_accel_m_s2", ""),
+        footprint_length_m=_positive(data, "footprint_length_m", ""),
+        footprint_width_m=_positive(data, "footprint_width_m", ""),
+        roll_model=model,
+        description=str(data.get("description", "")),
+        extra=extra,
+    )
+
+
+def builtin_robots() -> list[str]:
+    """Names of the profiles shipped with sphereplan."""
+    folder = resources.files("planner") / "robots"
+    return sorted(p.name[:-5] for p in folder.iterdir() if p.name.endswith(".toml"))
+
+
+def load_robot(name_or_path: str | Path | None = None) -> RobotProfile:
+    """Load a built-in profile by name (``zju-60``) or a user's TOML file by path.
+
+    Raises :class:`NotFound` for an unknown name and :class:`RobotProfileError` for a bad file.
+    """
+    spec = DEFAULT_ROBOT if name_or_path is None else str(name_or_path)
+    path = Path(spec)
+    if spec.endswith(".toml") or path.is_file():
+        if not path.is_file():
+            raise NotFound("robot", f"profile file {spec} does not exist")
+        text = path.read_text()
+        default_name = path.stem
+    else:
+        if spec not in builtin_robots():
+            raise NotFound("robot", f"unknown robot {spec!r}; built-in: {', '.join(builtin_robots())}")
+        text = (resources.files("planner") / "robots" / f"{spec}.toml").read_text()
+        default_name = spec
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise RobotProfileError("robot", f"{spec} is not valid TOML: {exc}") from exc
+    return profile_from_dict(data, default_name)

@@ -1,0 +1,72 @@
+"""The ``sphereplan`` command line.
+
+Each verb lives in its own module of this package and exposes ``VERB`` (its name), ``HELP`` (one line)
+and ``add_arguments(parser)``; the parser's ``func`` default takes the parsed arguments and returns the
+exit code. Verbs are discovered, so a new capability adds one module and nothing else.
+
+Exit codes (DESIGN.md): 0 success, 2 bad input (the message on stderr names the field),
+3 no solution exists, 4 timeout.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import logging
+import pkgutil
+import sys
+from collections.abc import Sequence
+
+from planner.errors import InvalidInput, NotFound, PlannerTimedOut, PlanningError, SpherePlanError
+
+EXIT_OK = 0
+EXIT_BAD_INPUT = 2
+EXIT_NO_SOLUTION = 3
+EXIT_TIMEOUT = 4
+
+
+class _Parser(argparse.ArgumentParser):
+    """argparse that exits with code 2 and a one-line message naming the bad option."""
+
+    def error(self, message: str) -> None:  # type: ignore[override]
+        self.print_usage(sys.stderr)
+        sys.stderr.write(f"{self.prog}: error: {message}\n")
+        raise SystemExit(EXIT_BAD_INPUT)
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = _Parser(prog="sphereplan", description="Motion planning for spherical rolling robots.")
+    parser.add_argument("-v", "--verbose", action="store_true", help="log progress to stderr")
+    sub = parser.add_subparsers(dest="verb", required=True, parser_class=_Parser)
+    for info in sorted(pkgutil.iter_modules(__path__), key=lambda m: m.name):
+        if info.name.startswith("_"):
+            continue
+        module = importlib.import_module(f"{__name__}.{info.name}")
+        verb_parser = sub.add_parser(module.VERB, help=module.HELP, description=module.HELP)
+        module.add_arguments(verb_parser)
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point of the ``sphereplan`` console script; returns the exit code."""
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    logging.basicConfig(level=logging.INFO if args.verbose else logging.WARNING, format="%(levelname)s %(message)s")
+    try:
+        return int(args.func(args))
+    except (InvalidInput, NotFound) as exc:
+        sys.stderr.write(f"sphereplan {args.verb}: error: {exc}\n")
+        return EXIT_BAD_INPUT
+    except PlannerTimedOut as exc:
+        sys.stderr.write(f"sphereplan {args.verb}: timeout: {exc}\n")
+        return EXIT_TIMEOUT
+    except PlanningError as exc:
+        sys.stderr.write(f"sphereplan {args.verb}: no solution: {exc}\n")
+        return EXIT_NO_SOLUTION
+    except SpherePlanError as exc:
+        sys.stderr.write(f"sphereplan {args.verb}: error: {exc}\n")
+        return EXIT_BAD_INPUT
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
