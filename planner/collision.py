@@ -1,0 +1,148 @@
+"""Three-circle footprint collision checking (paper 001 §4.1, Fig. 6).
+
+The robot's footprint (a ``footprint_length_m`` × ``footprint_width_m`` rectangle centred on the sphere,
+length along the heading) is covered by N circles (default 3) of radius r_c placed along its longer
+axis; their union covers the rectangle. Obstacles are "inflated" by r_c through a Euclidean distance
+transform, so a pose is free when every circle centre has clearance ≥ r_c: O(N) lookups per pose.
+
+Clearance is conservative: the distance transform measures cell centre to cell centre (d), and a point
+anywhere in a cell is at least d − √2·res from any point of the nearest blocked cell, so that is what
+is stored. Cells outside the map count as blocked (the robot must stay on the map).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from numba import njit
+from scipy.ndimage import distance_transform_edt
+from scipy.spatial import cKDTree
+
+from planner.occupancy import OccupancyGrid
+from planner.robot import RobotProfile
+
+
+@dataclass(frozen=True)
+class CircleFootprint:
+    """N covering circles in the body frame (x forward, y left), metres."""
+
+    offsets_x: np.ndarray
+    offsets_y: np.ndarray
+    radius_m: float
+
+    @classmethod
+    def for_robot(cls, robot: RobotProfile, n_circles: int = 3) -> CircleFootprint:
+        """Cover the footprint rectangle with ``n_circles`` equal circles along its longer axis."""
+        if n_circles < 1:
+            raise ValueError("n_circles must be >= 1")
+        length, width = robot.footprint_length_m, robot.footprint_width_m
+        long_axis, short_axis = max(length, width), min(length, width)
+        seg = long_axis / n_circles
+        centres = (np.arange(n_circles) + 0.5) * seg - long_axis / 2.0
+        r_c = math.hypot(seg / 2.0, short_axis / 2.0)
+        zeros = np.zeros(n_circles)
+        if length >= width:
+            return cls(centres, zeros, r_c)
+        return cls(zeros, centres, r_c)
+
+    def centres(self, x: float, y: float, yaw: float) -> np.ndarray:
+        """World positions (N, 2) of the circle centres at pose (x, y, yaw)."""
+        c, s = math.cos(yaw), math.sin(yaw)
+        return np.stack(
+            [x + c * self.offsets_x - s * self.offsets_y, y + s * self.offsets_x + c * self.offsets_y], axis=1
+        )
+
+
+class ClearanceMap:
+    """Conservative clearance (m) of every cell to the nearest blocked cell, for O(1) pose checks."""
+
+    def __init__(self, grid: OccupancyGrid, allow_unknown: bool = False) -> None:
+        blocked = grid.blocked(allow_unknown)
+        padded = np.pad(blocked, 1, constant_values=True)
+        edt = distance_transform_edt(~padded)[1:-1, 1:-1] * grid.resolution_m
+        self.grid = grid
+        self.blocked = blocked
+        self.clearance = (edt - math.sqrt(2.0) * grid.resolution_m).astype(np.float64)
+        self.origin_x = float(grid.origin[0])
+        self.origin_y = float(grid.origin[1])
+        self.resolution_m = float(grid.resolution_m)
+        self._tree: cKDTree | None = None
+        self._blocked_centres = np.zeros((0, 2))
+
+    def at(self, xs: np.ndarray, ys: np.ndarray) -> np.ndarray:
+        """Clearance at world points (vectorised); −inf outside the map."""
+        return _clearance_at(self.clearance, self.origin_x, self.origin_y, self.resolution_m,
+                             np.asarray(xs, float).ravel(), np.asarray(ys, float).ravel())
+
+    def pose_margin(self, footprint: CircleFootprint, poses: np.ndarray) -> np.ndarray:
+        """Per pose (rows x, y, yaw): min over circles of clearance − r_c. Free where ≥ 0."""
+        poses = np.atleast_2d(np.asarray(poses, float))
+        c, s = np.cos(poses[:, 2:3]), np.sin(poses[:, 2:3])
+        cx = poses[:, 0:1] + c * footprint.offsets_x - s * footprint.offsets_y
+        cy = poses[:, 1:2] + s * footprint.offsets_x + c * footprint.offsets_y
+        clear = self.at(cx, cy).reshape(cx.shape)
+        return clear.min(axis=1) - footprint.radius_m
+
+    def exact_pose_margin(self, footprint: CircleFootprint, poses: np.ndarray) -> np.ndarray:
+        """Per pose: min over circles of the *exact* distance to the nearest blocked cell square − r_c.
+
+        Independent of the distance transform (used for the final fine re-check): blocked cells are
+        squares of side ``resolution_m``; leaving the map counts as −inf.
+        """
+        poses = np.atleast_2d(np.asarray(poses, float))
+        c, s = np.cos(poses[:, 2:3]), np.sin(poses[:, 2:3])
+        cx = (poses[:, 0:1] + c * footprint.offsets_x - s * footprint.offsets_y).ravel()
+        cy = (poses[:, 1:2] + s * footprint.offsets_x + c * footprint.offsets_y).ravel()
+        res = self.resolution_m
+        reach = footprint.radius_m + res
+        dist = np.full(cx.size, reach)
+        if self._tree is None:
+            iy, ix = np.nonzero(self.blocked)
+            self._blocked_centres = np.column_stack([self.origin_x + (ix + 0.5) * res, self.origin_y + (iy + 0.5) * res])
+            self._tree = cKDTree(self._blocked_centres) if len(ix) else None
+        if self._tree is not None:
+            pts = np.column_stack([cx, cy])
+            for i, near in enumerate(self._tree.query_ball_point(pts, reach)):
+                if near:
+                    d = np.abs(self._blocked_centres[near] - pts[i]) - res / 2
+                    dist[i] = min(dist[i], float(np.hypot(*np.maximum(d, 0.0).T).min()))
+        w, h = self.grid.size_m
+        ex = np.minimum.reduce([cx - self.origin_x, self.origin_x + w - cx, cy - self.origin_y, self.origin_y + h - cy])
+        dist = np.where(ex < 0, -np.inf, np.minimum(dist, ex))
+        return dist.reshape(poses.shape[0], -1).min(axis=1) - footprint.radius_m
+
+
+@njit(cache=True)
+def _clearance_at(clear: np.ndarray, ox: float, oy: float, res: float, xs: np.ndarray, ys: np.ndarray) -> np.ndarray:
+    out = np.empty(xs.size)
+    h, w = clear.shape
+    for i in range(xs.size):
+        ix = int(math.floor((xs[i] - ox) / res))
+        iy = int(math.floor((ys[i] - oy) / res))
+        out[i] = clear[iy, ix] if 0 <= ix < w and 0 <= iy < h else -math.inf
+    return out
+
+
+@njit(cache=True)
+def pose_margin_nb(
+    clear: np.ndarray, ox: float, oy: float, res: float, x: float, y: float, yaw: float,
+    offx: np.ndarray, offy: np.ndarray, r_c: float,
+) -> float:
+    """Min over circles of (clearance − r_c) at one pose; −inf when a circle leaves the map."""
+    c = math.cos(yaw)
+    s = math.sin(yaw)
+    h, w = clear.shape
+    best = math.inf
+    for k in range(offx.size):
+        px = x + c * offx[k] - s * offy[k]
+        py = y + s * offx[k] + c * offy[k]
+        ix = int(math.floor((px - ox) / res))
+        iy = int(math.floor((py - oy) / res))
+        if ix < 0 or iy < 0 or ix >= w or iy >= h:
+            return -math.inf
+        m = clear[iy, ix] - r_c
+        if m < best:
+            best = m
+    return best

@@ -1,0 +1,102 @@
+"""Dubins shortest paths (forward-only, minimum turning radius ρ), numba-compiled.
+
+Used for the non-holonomic heuristic (paper 001 eq. 14h) and for analytic expansions. The six words
+LSL, LSR, RSL, RSR, RLR, LRL follow Shkel & Lumelsky's closed forms; the tests check lengths and end
+poses against OMPL's ``DubinsStateSpace`` (the reference implementation) on random pairs.
+
+A path is (word, t, p, q): three segments of normalised lengths t, p, q (multiply by ρ for metres)
+with turn signs ``WORD_TURNS[word]`` (+1 left, 0 straight, −1 right).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+TWO_PI = 2.0 * math.pi
+WORD_NAMES = ("LSL", "LSR", "RSL", "RSR", "RLR", "LRL")
+WORD_TURNS = np.array([[1, 0, 1], [1, 0, -1], [-1, 0, 1], [-1, 0, -1], [-1, 1, -1], [1, -1, 1]], dtype=np.int64)
+
+
+@njit(cache=True)
+def _mod2pi(a: float) -> float:
+    return a - TWO_PI * math.floor(a / TWO_PI)
+
+
+@njit(cache=True)
+def dubins_shortest(
+    x0: float, y0: float, th0: float, x1: float, y1: float, th1: float, rho: float
+) -> tuple[int, float, float, float]:
+    """Shortest Dubins word and normalised segment lengths from (x0, y0, th0) to (x1, y1, th1)."""
+    dx = (x1 - x0) / rho
+    dy = (y1 - y0) / rho
+    d = math.hypot(dx, dy)
+    theta = _mod2pi(math.atan2(dy, dx)) if d > 1e-12 else 0.0
+    a = _mod2pi(th0 - theta)
+    b = _mod2pi(th1 - theta)
+    sa, sb, ca, cb = math.sin(a), math.sin(b), math.cos(a), math.cos(b)
+    cab = math.cos(a - b)
+    best = math.inf
+    bw, bt, bp, bq = -1, 0.0, 0.0, 0.0
+    # LSL
+    p2 = 2.0 + d * d - 2.0 * cab + 2.0 * d * (sa - sb)
+    if p2 >= 0.0:
+        tmp = math.atan2(cb - ca, d + sa - sb)
+        t = _mod2pi(-a + tmp)
+        p = math.sqrt(p2)
+        q = _mod2pi(b - tmp)
+        if t + p + q < best:
+            best, bw, bt, bp, bq = t + p + q, 0, t, p, q
+    # LSR
+    p2 = -2.0 + d * d + 2.0 * cab + 2.0 * d * (sa + sb)
+    if p2 >= 0.0:
+        p = math.sqrt(p2)
+        tmp = math.atan2(-ca - cb, d + sa + sb) - math.atan2(-2.0, p)
+        t = _mod2pi(-a + tmp)
+        q = _mod2pi(-b + tmp)
+        if t + p + q < best:
+            best, bw, bt, bp, bq = t + p + q, 1, t, p, q
+    # RSL
+    p2 = d * d - 2.0 + 2.0 * cab - 2.0 * d * (sa + sb)
+    if p2 >= 0.0:
+        p = math.sqrt(p2)
+        tmp = math.atan2(ca + cb, d - sa - sb) - math.atan2(2.0, p)
+        t = _mod2pi(a - tmp)
+        q = _mod2pi(b - tmp)
+        if t + p + q < best:
+            best, bw, bt, bp, bq = t + p + q, 2, t, p, q
+    # RSR
+    p2 = 2.0 + d * d - 2.0 * cab + 2.0 * d * (sb - sa)
+    if p2 >= 0.0:
+        tmp = math.atan2(ca - cb, d - sa + sb)
+        t = _mod2pi(a - tmp)
+        p = math.sqrt(p2)
+        q = _mod2pi(-b + tmp)
+        if t + p + q < best:
+            best, bw, bt, bp, bq = t + p + q, 3, t, p, q
+    # RLR
+    tmp = (6.0 - d * d + 2.0 * cab + 2.0 * d * (sa - sb)) / 8.0
+    if abs(tmp) <= 1.0:
+        p = _mod2pi(TWO_PI - math.acos(tmp))
+        t = _mod2pi(a - math.atan2(ca - cb, d - sa + sb) + p / 2.0)
+        q = _mod2pi(a - b - t + p)
+        if t + p + q < best:
+            best, bw, bt, bp, bq = t + p + q, 4, t, p, q
+    # LRL
+    tmp = (6.0 - d * d + 2.0 * cab + 2.0 * d * (sb - sa)) / 8.0
+    if abs(tmp) <= 1.0:
+        p = _mod2pi(TWO_PI - math.acos(tmp))
+        t = _mod2pi(-a - math.atan2(ca - cb, d + sa - sb) + p / 2.0)
+        q = _mod2pi(_mod2pi(b) - a - t + p)
+        if t + p + q < best:
+            best, bw, bt, bp, bq = t + p + q, 5, t, p, q
+    return bw, bt, bp, bq
+
+
+@njit(cache=True)
+def dubins_distance(x0: float, y0: float, th0: float, x1: float, y1: float, th1: float, rho: float) -> float:
+    """Length (m) of the shortest Dubins path at minimum turning radius ``rho`` (m)."""
+    w, t, p, q = dubins_shortest(x0, y0, th0, x1, y1, th1, rho)
+    return (t + p + q) * rho

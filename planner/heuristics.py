@@ -1,0 +1,145 @@
+"""Heuristics of the spherical Hybrid A* (paper 001 eq. 14g–i).
+
+* Holonomic cost-to-go with obstacles (eq. 14g): Dijkstra from the goal over a grid (optionally
+  downsampled, as Nav2's Smac planner does) where a cell is passable when the robot's centre could be
+  there, and each step costs its length × (1 + w·proximity), the same travel cost the search charges.
+  16-connected moves keep the grid metric within 2.7 % of Euclidean; the result is divided by that
+  factor and reduced by one coarse-cell diagonal, so it never exceeds the true cost (tested).
+* Dubins distance without obstacles (eq. 14h): :func:`planner.dubins.dubins_distance` at the robot's
+  minimum turning radius.
+
+``h = max(holonomic, dubins)`` and ``f = g + h·(1 + greed)`` (eq. 14i–j) are combined in the search.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from planner._heap import heap_pop, heap_push
+
+# Worst-case ratio of the 16-connected grid metric to Euclidean distance.
+SIXTEEN_CONNECTED_RATIO = 1.0 / math.cos(math.atan2(1.0, 2.0) / 2.0)
+
+_MOVES = np.array(
+    [[1, 0], [-1, 0], [0, 1], [0, -1], [1, 1], [1, -1], [-1, 1], [-1, -1],
+     [2, 1], [1, 2], [-1, 2], [-2, 1], [-2, -1], [-1, -2], [1, -2], [2, -1]],
+    dtype=np.int64,
+)
+
+
+def proximity_cost(margin_m: np.ndarray | float, range_m: float) -> np.ndarray | float:
+    """Normalised proximity cost in [0, 1]: 1 touching the inflated obstacles, 0 beyond ``range_m``."""
+    if range_m <= 0:
+        return np.zeros_like(np.asarray(margin_m, float))
+    return np.clip(1.0 - np.asarray(margin_m, float) / range_m, 0.0, 1.0)
+
+
+def coarse_cost_grid(
+    clearance: np.ndarray, centre_threshold_m: float, circle_radius_m: float, prox_range_m: float,
+    cost_penalty: float, factor: int,
+) -> np.ndarray:
+    """Per coarse cell: multiplier 1 + w·proximity (the smallest over its fine cells), inf if impassable.
+
+    A fine cell is passable when its clearance ≥ ``centre_threshold_m``; the proximity uses the
+    clearance margin over ``circle_radius_m`` (an upper bound of the search's per-pose margin).
+    """
+    h, w = clearance.shape
+    hc, wc = -(-h // factor), -(-w // factor)
+    pad = np.full((hc * factor, wc * factor), -np.inf)
+    pad[:h, :w] = clearance
+    blocks = pad.reshape(hc, factor, wc, factor).max(axis=(1, 3))
+    prox = proximity_cost(blocks - circle_radius_m, prox_range_m)
+    mult = 1.0 + cost_penalty * np.asarray(prox, float)
+    mult[blocks < centre_threshold_m] = np.inf
+    return mult
+
+
+@njit(cache=True)
+def _dijkstra16(mult: np.ndarray, gx: int, gy: int, cell_m: float) -> np.ndarray:
+    h, w = mult.shape
+    dist = np.full((h, w), np.inf)
+    if not (0 <= gx < w and 0 <= gy < h) or not np.isfinite(mult[gy, gx]):
+        return dist
+    cap = h * w * 8 + 16
+    keys = np.empty(cap)
+    vals = np.empty(cap, dtype=np.int64)
+    size = np.zeros(1, dtype=np.int64)
+    dist[gy, gx] = 0.0
+    heap_push(keys, vals, size, 0.0, gy * w + gx)
+    done = np.zeros((h, w), dtype=np.bool_)
+    while size[0] > 0:
+        d, idx = heap_pop(keys, vals, size)
+        cy = idx // w
+        cx = idx - cy * w
+        if done[cy, cx]:
+            continue
+        done[cy, cx] = True
+        for k in range(_MOVES.shape[0]):
+            mx = _MOVES[k, 0]
+            my = _MOVES[k, 1]
+            nx = cx + mx
+            ny = cy + my
+            if nx < 0 or ny < 0 or nx >= w or ny >= h or done[ny, nx]:
+                continue
+            m = mult[ny, nx]
+            if not np.isfinite(m):
+                continue
+            if abs(mx) + abs(my) == 3:
+                # knight move: both cells it passes must be open
+                ax = cx + (mx // 2 if abs(mx) == 2 else 0)
+                ay = cy + (my // 2 if abs(my) == 2 else 0)
+                bx = cx + (mx if abs(mx) == 1 else mx // 2)
+                by = cy + (my if abs(my) == 1 else my // 2)
+                if not (np.isfinite(mult[ay, ax]) and np.isfinite(mult[by, bx])):
+                    continue
+            elif abs(mx) + abs(my) == 2:
+                if not (np.isfinite(mult[cy, nx]) and np.isfinite(mult[ny, cx])):
+                    continue
+            step = math.sqrt(mx * mx + my * my) * cell_m * 0.5 * (m + mult[cy, cx])
+            nd = d + step
+            if nd < dist[ny, nx]:
+                dist[ny, nx] = nd
+                heap_push(keys, vals, size, nd, ny * w + nx)
+    return dist
+
+
+class HolonomicHeuristic:
+    """Admissible holonomic cost-to-go (m, weighted like the search's travel cost) from one goal.
+
+    Parameters
+    ----------
+    clearance : (H, W) conservative clearance of the fine grid (``ClearanceMap.clearance``), metres.
+    origin_xy, resolution_m : the fine grid's geometry.
+    goal_xy : goal position (m).
+    centre_threshold_m : clearance the robot's centre needs in any valid pose.
+    factor : downsampling factor (1 = full resolution).
+    """
+
+    def __init__(
+        self, clearance: np.ndarray, origin_xy: tuple[float, float], resolution_m: float,
+        goal_xy: tuple[float, float], centre_threshold_m: float, circle_radius_m: float,
+        prox_range_m: float, cost_penalty: float, factor: int = 2,
+    ) -> None:
+        self.factor = max(1, int(factor))
+        self.cell_m = resolution_m * self.factor
+        self.origin_xy = origin_xy
+        mult = coarse_cost_grid(clearance, centre_threshold_m, circle_radius_m, prox_range_m, cost_penalty,
+                                self.factor)
+        gx = math.floor((goal_xy[0] - origin_xy[0]) / self.cell_m)
+        gy = math.floor((goal_xy[1] - origin_xy[1]) / self.cell_m)
+        raw = _dijkstra16(mult, gx, gy, self.cell_m)
+        # Within one coarse cell the grid knows nothing: allow a diagonal of slack at each end, and
+        # undo the 16-connected metric's overestimate of Euclidean length.
+        slack = 2.0 * math.sqrt(2.0) * self.cell_m
+        self.table = np.maximum(raw / SIXTEEN_CONNECTED_RATIO - slack, 0.0)
+
+    def __call__(self, x: float, y: float) -> float:
+        ix = math.floor((x - self.origin_xy[0]) / self.cell_m)
+        iy = math.floor((y - self.origin_xy[1]) / self.cell_m)
+        h, w = self.table.shape
+        if 0 <= ix < w and 0 <= iy < h:
+            return float(self.table[iy, ix])
+        return math.inf

@@ -1,0 +1,81 @@
+"""Exact motion of the rolling sphere over one planning step (paper 001 eq. 1, corrected eq. 14a–c).
+
+Paper 001 eq. 1 (the ground truth, SEED-NOTES):
+
+    ẋ = v cos θ − r φ̇ sin θ,   ẏ = v sin θ + r φ̇ cos θ,   θ̇ = v tan φ / r
+
+A Hybrid-A* child holds a constant roll φc. Changing the roll from φp to φc rolls the shell sideways:
+integrating the φ̇ terms with θ fixed shifts the centre by r·Δφ along the left normal
+(−sin θ, cos θ) (the printed eq. 14a–b uses sin/cos φp there: a typo). Holding φc while rolling a
+signed arc length s (negative when reversing) turns the heading by κ(φc)·s and moves the centre along a
+circle of radius 1/κ (the printed factor v·Δt in front of (sin θc − sin θp) is only right in the
+straight limit; the correct factor is the turning radius 1/κ = r / tan φc).
+
+``κ(φ)`` comes from the robot's :class:`~planner.robot.RollModel` (tan φ / r for the kinematic model).
+All functions are numba-compiled so the search can call them in its inner loop.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+STRAIGHT_EPS = 1e-9
+
+
+@njit(cache=True)
+def roll_shift(x: float, y: float, yaw: float, radius_m: float, d_roll: float) -> tuple[float, float]:
+    """Centre after changing roll by ``d_roll`` (rad) at heading ``yaw``: eq. 1 with v = 0."""
+    return x - radius_m * d_roll * math.sin(yaw), y + radius_m * d_roll * math.cos(yaw)
+
+
+@njit(cache=True)
+def arc_step(x: float, y: float, yaw: float, curvature: float, s: float) -> tuple[float, float, float]:
+    """Pose after rolling signed arc length ``s`` (m) at constant ``curvature`` (1/m): eq. 1 with φ̇ = 0."""
+    if abs(curvature) < STRAIGHT_EPS:
+        return x + s * math.cos(yaw), y + s * math.sin(yaw), yaw
+    yaw2 = yaw + curvature * s
+    return (
+        x + (math.sin(yaw2) - math.sin(yaw)) / curvature,
+        y - (math.cos(yaw2) - math.cos(yaw)) / curvature,
+        yaw2,
+    )
+
+
+@njit(cache=True)
+def child_pose(
+    x: float, y: float, yaw: float, roll_p: float, roll_c: float, curvature_c: float, radius_m: float, s: float
+) -> tuple[float, float, float]:
+    """Hybrid-A* child of eq. 14 (corrected): roll change φp→φc, then an arc of length ``s`` at φc."""
+    x1, y1 = roll_shift(x, y, yaw, radius_m, roll_c - roll_p)
+    return arc_step(x1, y1, yaw, curvature_c, s)
+
+
+def sample_motion(
+    x: float, y: float, yaw: float, roll_p: float, roll_c: float, curvature_c: float, radius_m: float,
+    s: float, spacing_m: float,
+) -> np.ndarray:
+    """Dense poses (n, 4) of one step: the sideways roll change, then the arc; rows (x, y, yaw, roll).
+
+    Consecutive rows are at most ``spacing_m`` apart. The first row is the step's start pose.
+    """
+    rows = [(x, y, yaw, roll_p)]
+    shift = abs(radius_m * (roll_c - roll_p))
+    n_shift = math.ceil(shift / spacing_m) if shift > 0 else 0
+    for i in range(1, n_shift + 1):
+        f = i / n_shift
+        xs, ys = roll_shift(x, y, yaw, radius_m, f * (roll_c - roll_p))
+        rows.append((xs, ys, yaw, roll_p + f * (roll_c - roll_p)))
+    x1, y1 = roll_shift(x, y, yaw, radius_m, roll_c - roll_p)
+    n_arc = max(1, math.ceil(abs(s) / spacing_m)) if s != 0 else 0
+    for i in range(1, n_arc + 1):
+        xa, ya, yawa = arc_step(x1, y1, yaw, curvature_c, s * i / n_arc)
+        rows.append((xa, ya, yawa, roll_c))
+    return np.array(rows, dtype=float)
+
+
+def wrap_angle(a: float | np.ndarray) -> float | np.ndarray:
+    """Wrap to (−π, π]."""
+    return np.arctan2(np.sin(a), np.cos(a))
