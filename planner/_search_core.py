@@ -90,20 +90,24 @@ def _closed_key(p: np.ndarray, w: int, x: float, y: float, yaw: float, ri: int, 
 
 
 @njit(cache=True)
-def _try_shot(
+def try_shot(
     clear: np.ndarray, p: np.ndarray, offx: np.ndarray, offy: np.ndarray,
-    x: float, y: float, yaw: float, roll: float,
+    x: float, y: float, yaw: float, roll: float, gx: float, gy: float, gyaw: float, groll: float,
     seg_roll: np.ndarray, seg_curv: np.ndarray, seg_len: np.ndarray,
 ) -> int:
-    """Analytic expansion: a Dubins path to the goal turned into roll-held segments (roll changes shift
-    the centre sideways, so the Dubins target is corrected by fixed-point iteration until the rolled end
-    lands on the goal). Returns the number of segments written, or 0 when no valid shot exists."""
+    """Analytic expansion from (x, y, yaw, roll) to (gx, gy, gyaw) arriving with roll ``groll``.
+
+    A Dubins path at the minimum radius is turned into roll-held segments (±φmax on arcs, 0 on straights).
+    Each roll change shifts the centre sideways (eq. 1), so the Dubins target is corrected by fixed-point
+    iteration until the rolled end lands on the goal (< 0.1 mm). Returns the number of segments written,
+    or 0 when no valid, collision-free shot exists.
+    """
     radius, rho, max_roll = p[P_RADIUS], p[P_RHO], p[P_MAX_ROLL]
-    tx, ty = p[P_GX], p[P_GY]
+    tx, ty = gx, gy
     ok = False
     n = 0
-    for _ in range(6):
-        word, t, pp, q = dubins_shortest(x, y, yaw, tx, ty, p[P_GYAW], rho)
+    for _ in range(8):
+        word, t, pp, q = dubins_shortest(x, y, yaw, tx, ty, gyaw, rho)
         if word < 0:
             return 0
         cx, cy, cyaw, croll = x, y, yaw, roll
@@ -121,9 +125,9 @@ def _try_shot(
             cx, cy = roll_shift(cx, cy, cyaw, radius, r_k - croll)
             cx, cy, cyaw = arc_step(cx, cy, cyaw, turn / rho, lens[k])
             croll = r_k
-        cx, cy = roll_shift(cx, cy, cyaw, radius, -croll)
-        ex = cx - p[P_GX]
-        ey = cy - p[P_GY]
+        cx, cy = roll_shift(cx, cy, cyaw, radius, groll - croll)
+        ex = cx - gx
+        ey = cy - gy
         if math.hypot(ex, ey) < 1e-4:
             ok = True
             break
@@ -134,17 +138,70 @@ def _try_shot(
     cx, cy, cyaw, croll = x, y, yaw, roll
     worst = math.inf
     for k in range(n):
-        worst = _motion_margin(clear, p, offx, offy, cx, cy, cyaw, seg_roll[k] - croll, seg_curv[k], seg_len[k],
-                               worst)
+        worst = _motion_margin(clear, p, offx, offy, cx, cy, cyaw, seg_roll[k] - croll, seg_curv[k],
+                               seg_len[k], worst)
         if worst < 0.0:
             return 0
         cx, cy = roll_shift(cx, cy, cyaw, radius, seg_roll[k] - croll)
         cx, cy, cyaw = arc_step(cx, cy, cyaw, seg_curv[k], seg_len[k])
         croll = seg_roll[k]
-    worst = _motion_margin(clear, p, offx, offy, cx, cy, cyaw, -croll, 0.0, 0.0, worst)
+    worst = _motion_margin(clear, p, offx, offy, cx, cy, cyaw, groll - croll, 0.0, 0.0, worst)
     if worst < 0.0:
         return 0
     return n
+
+
+@njit(cache=True)
+def shot_length(radius: float, roll: float, groll: float, seg_roll: np.ndarray, seg_len: np.ndarray, n: int) -> float:
+    """Distance the centre travels along a shot: arcs plus the sideways shifts of its roll changes."""
+    total = 0.0
+    croll = roll
+    for k in range(n):
+        total += seg_len[k] + radius * abs(seg_roll[k] - croll)
+        croll = seg_roll[k]
+    return total + radius * abs(groll - croll)
+
+
+@njit(cache=True)
+def shortcut(
+    clear: np.ndarray, p: np.ndarray, offx: np.ndarray, offy: np.ndarray, knots: np.ndarray, cum: np.ndarray,
+    max_tries: int, out_ij: np.ndarray, out_roll: np.ndarray, out_curv: np.ndarray, out_len: np.ndarray,
+    out_n: np.ndarray,
+) -> int:
+    """Greedy shortcutting: from knot i, connect to the farthest knot j reachable by a valid, shorter shot.
+
+    knots (n, 4) are poses (x, y, yaw, roll) at motion ends; cum[i] is the distance travelled up to knot i.
+    At most ``max_tries`` candidate j are tried per i. Returns the number of shortcuts written.
+    """
+    n = knots.shape[0]
+    sr = np.zeros(MAX_SHOT_SEGS)
+    sc = np.zeros(MAX_SHOT_SEGS)
+    sl = np.zeros(MAX_SHOT_SEGS)
+    count = 0
+    i = 0
+    while i < n - 2:
+        stride = max(1, (n - 2 - i) // max_tries)
+        j = n - 1
+        found = False
+        while j > i + 1:
+            m = try_shot(clear, p, offx, offy, knots[i, 0], knots[i, 1], knots[i, 2], knots[i, 3],
+                         knots[j, 0], knots[j, 1], knots[j, 2], knots[j, 3], sr, sc, sl)
+            if m > 0 and shot_length(p[P_RADIUS], knots[i, 3], knots[j, 3], sr, sl, m) < cum[j] - cum[i] - 1e-6:
+                out_ij[count, 0] = i
+                out_ij[count, 1] = j
+                out_n[count] = m
+                for k in range(m):
+                    out_roll[count, k] = sr[k]
+                    out_curv[count, k] = sc[k]
+                    out_len[count, k] = sl[k]
+                count += 1
+                i = j
+                found = True
+                break
+            j -= stride
+        if not found:
+            i += 1
+    return count
 
 
 @njit(cache=True)
@@ -194,7 +251,8 @@ def search_chunk(
         counters[C_SINCE_SHOT] += 1
         if counters[C_SINCE_SHOT] >= max(1, int(h_here / p[P_SHOT_RATIO])):
             counters[C_SINCE_SHOT] = 0
-            n = _try_shot(clear, p, offx, offy, x, y, yaw, roll, seg_roll, seg_curv, seg_len)
+            n = try_shot(clear, p, offx, offy, x, y, yaw, roll, p[P_GX], p[P_GY], p[P_GYAW], 0.0,
+                         seg_roll, seg_curv, seg_len)
             if n > 0:
                 counters[C_RESULT] = k
                 counters[C_SHOT_SEGS] = n

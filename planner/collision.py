@@ -88,26 +88,33 @@ class ClearanceMap:
     def exact_pose_margin(self, footprint: CircleFootprint, poses: np.ndarray) -> np.ndarray:
         """Per pose: min over circles of the *exact* distance to the nearest blocked cell square − r_c.
 
-        Independent of the distance transform (used for the final fine re-check): blocked cells are
-        squares of side ``resolution_m``; leaving the map counts as −inf.
+        Independent of the distance transform (used for the final fine re-check and the reported
+        clearance): blocked cells are squares of side ``resolution_m`` (the nearest square is among the
+        8 nearest cell centres); distances are capped at r_c + 1 m; leaving the map counts as −inf.
         """
         poses = np.atleast_2d(np.asarray(poses, float))
         c, s = np.cos(poses[:, 2:3]), np.sin(poses[:, 2:3])
         cx = (poses[:, 0:1] + c * footprint.offsets_x - s * footprint.offsets_y).ravel()
         cy = (poses[:, 1:2] + s * footprint.offsets_x + c * footprint.offsets_y).ravel()
         res = self.resolution_m
-        reach = footprint.radius_m + res
+        reach = footprint.radius_m + 1.0
         dist = np.full(cx.size, reach)
         if self._tree is None:
             iy, ix = np.nonzero(self.blocked)
-            self._blocked_centres = np.column_stack([self.origin_x + (ix + 0.5) * res, self.origin_y + (iy + 0.5) * res])
+            self._blocked_centres = np.column_stack(
+                [self.origin_x + (ix + 0.5) * res, self.origin_y + (iy + 0.5) * res]
+            )
             self._tree = cKDTree(self._blocked_centres) if len(ix) else None
         if self._tree is not None:
             pts = np.column_stack([cx, cy])
-            for i, near in enumerate(self._tree.query_ball_point(pts, reach)):
-                if near:
-                    d = np.abs(self._blocked_centres[near] - pts[i]) - res / 2
-                    dist[i] = min(dist[i], float(np.hypot(*np.maximum(d, 0.0).T).min()))
+            k = min(8, len(self._blocked_centres))
+            _, idx = self._tree.query(pts, k=k, distance_upper_bound=reach)
+            idx = idx.reshape(len(pts), k)
+            valid = idx < len(self._blocked_centres)
+            centres = self._blocked_centres[np.where(valid, idx, 0)]
+            gap = np.maximum(np.abs(centres - pts[:, None, :]) - res / 2, 0.0)
+            exact = np.where(valid, np.hypot(gap[..., 0], gap[..., 1]), reach)
+            dist = np.minimum(dist, exact.min(axis=1))
         w, h = self.grid.size_m
         ex = np.minimum.reduce([cx - self.origin_x, self.origin_x + w - cx, cy - self.origin_y, self.origin_y + h - cy])
         dist = np.where(ex < 0, -np.inf, np.minimum(dist, ex))

@@ -76,6 +76,43 @@ def sample_motion(
     return np.array(rows, dtype=float)
 
 
+@njit(cache=True)
+def densify_motions(start: np.ndarray, motions: np.ndarray, radius_m: float, spacing_m: float) -> np.ndarray:
+    """Dense poses along a chain of motions, consecutive rows at most ``spacing_m`` apart.
+
+    ``start`` is (x, y, yaw) with roll 0; ``motions`` rows are (held roll, curvature, signed arc length):
+    each rolls sideways to the held roll (eq. 1, v = 0) then along the arc. Returns (n, 5) rows
+    (x, y, yaw, roll, direction) with direction +1 forward, −1 reverse (0 for the start row).
+    """
+    total = 1
+    roll = 0.0
+    for k in range(motions.shape[0]):
+        total += math.ceil(abs(radius_m * (motions[k, 0] - roll)) / spacing_m) + math.ceil(abs(motions[k, 2]) / spacing_m)
+        roll = motions[k, 0]
+    out = np.empty((total, 5))
+    x, y, yaw, roll = start[0], start[1], start[2], 0.0
+    out[0, 0], out[0, 1], out[0, 2], out[0, 3], out[0, 4] = x, y, yaw, 0.0, 0.0
+    n = 1
+    for k in range(motions.shape[0]):
+        held, curv, s = motions[k, 0], motions[k, 1], motions[k, 2]
+        direction = 1.0 if s >= 0 else -1.0
+        d_roll = held - roll
+        m = math.ceil(abs(radius_m * d_roll) / spacing_m)
+        for i in range(1, m + 1):
+            xs, ys = roll_shift(x, y, yaw, radius_m, d_roll * i / m)
+            out[n, 0], out[n, 1], out[n, 2], out[n, 3], out[n, 4] = xs, ys, yaw, roll + d_roll * i / m, direction
+            n += 1
+        x, y = roll_shift(x, y, yaw, radius_m, d_roll)
+        roll = held
+        m = math.ceil(abs(s) / spacing_m)
+        x0, y0, yaw0 = x, y, yaw
+        for i in range(1, m + 1):
+            x, y, yaw = arc_step(x0, y0, yaw0, curv, s * i / m)
+            out[n, 0], out[n, 1], out[n, 2], out[n, 3], out[n, 4] = x, y, yaw, roll, direction
+            n += 1
+    return out[:n]
+
+
 def wrap_angle(a: float | np.ndarray) -> float | np.ndarray:
     """Wrap to (−π, π]."""
     return np.arctan2(np.sin(a), np.cos(a))

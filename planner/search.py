@@ -46,7 +46,7 @@ from planner.errors import (
     StartOutsideMap,
 )
 from planner.heuristics import HolonomicHeuristic
-from planner.kinematics import sample_motion, wrap_angle
+from planner.kinematics import child_pose, densify_motions, wrap_angle
 from planner.occupancy import OccupancyGrid
 from planner.result import PlanResult, build_states
 from planner.robot import RobotProfile
@@ -80,6 +80,8 @@ class PlannerOptions:
     max_iterations: int = 2_000_000
     chunk_expansions: int = 2000
     state_spacing_m: float = 0.04     # spacing of the returned states (≤ 5 cm, DESIGN.md)
+    smooth: bool = True               # shortcut the search's path with collision-checked rollable Dubins shots
+    smooth_max_tries: int = 24        # candidate shortcut targets tried per path knot
 
     def validate(self) -> None:
         """Raise :class:`InvalidInput` naming the first bad option."""
@@ -106,6 +108,7 @@ class PlannerOptions:
         need(self.time_limit_s > 0, "time_limit_s", "must be > 0")
         need(self.max_iterations > 0, "max_iterations", "must be > 0")
         need(0 < self.state_spacing_m <= 0.05, "state_spacing_m", "must be in (0, 0.05]")
+        need(1 <= self.smooth_max_tries <= 1000, "smooth_max_tries", "must be in [1, 1000]")
 
     @classmethod
     def from_dict(cls, data: dict[str, Any]) -> PlannerOptions:
@@ -279,9 +282,18 @@ class HybridAStar:
                 )
         motions = self._motions(node_f, node_i, int(counters[core.C_RESULT]),
                                 seg_roll, seg_curv, seg_len, int(counters[core.C_SHOT_SEGS]))
+        raw_length = self._length(start, motions)
+        t_search = time.perf_counter() - t0
+        if o.smooth:
+            motions = self._shortcut(start, motions, p, o.smooth_max_tries)
+        t_smooth = time.perf_counter() - t0 - t_search
         poses = self._densify(start, motions, o.state_spacing_m)
         fine = self._densify(start, motions, self.grid.resolution_m / 4)
-        margins = self.clearance.exact_pose_margin(self.footprint, fine[:, :3])
+        margins = self.clearance.pose_margin(self.footprint, fine[:, :3])
+        # The distance-transform margin is a lower bound of the exact one (by at most √2·res + one cell):
+        # only poses that could be the closest or in contact need the exact check.
+        near = margins <= margins.min() + 3.0 * self.grid.resolution_m
+        margins = self.clearance.exact_pose_margin(self.footprint, fine[near, :3])
         if margins.min() < 0:
             raise NoValidPathFound(
                 f"internal check failed: the exact re-check of the final path found a collision "
@@ -299,9 +311,50 @@ class HybridAStar:
             start=start,
             goal=goal,
             states=build_states(poses, self.robot),
-            min_clearance_m=float(self.clearance.pose_margin(self.footprint, fine[:, :3]).min()),
+            min_clearance_m=float(margins.min()),
             analytic_segments=int(counters[core.C_SHOT_SEGS]),
+            extra={"unsmoothed_length_m": raw_length, "search_time_s": t_search, "smoothing_time_s": t_smooth},
         )
+
+    def _knots(self, start: Pose, motions: list[tuple[float, float, float]]) -> np.ndarray:
+        """Pose (x, y, yaw, roll) and distance travelled at the start and after every motion: (n+1, 5)."""
+        x, y, yaw = start
+        roll, dist = 0.0, 0.0
+        rows = [(x, y, yaw, roll, dist)]
+        for held, curv, s in motions:
+            x2, y2, yaw2 = child_pose(x, y, yaw, roll, held, curv, self.robot.radius_m, s)
+            dist += abs(s) + self.robot.radius_m * abs(held - roll)
+            x, y, yaw, roll = x2, y2, yaw2, held
+            rows.append((x, y, yaw, roll, dist))
+        return np.array(rows)
+
+    def _length(self, start: Pose, motions: list[tuple[float, float, float]]) -> float:
+        return float(self._knots(start, motions)[-1, 4])
+
+    def _shortcut(
+        self, start: Pose, motions: list[tuple[float, float, float]], p: np.ndarray, max_tries: int
+    ) -> list[tuple[float, float, float]]:
+        """Replace runs of motions by shorter, collision-free rollable Dubins shots (see ``core.shortcut``)."""
+        knots = self._knots(start, motions)
+        n = len(knots)
+        out_ij = np.zeros((n, 2), dtype=np.int64)
+        out_roll, out_curv, out_len = (np.zeros((n, core.MAX_SHOT_SEGS)) for _ in range(3))
+        out_n = np.zeros(n, dtype=np.int64)
+        count = core.shortcut(self.clearance.clearance, p, self.footprint.offsets_x, self.footprint.offsets_y,
+                              np.ascontiguousarray(knots[:, :4]), np.ascontiguousarray(knots[:, 4]), max_tries,
+                              out_ij, out_roll, out_curv, out_len, out_n)
+        result: list[tuple[float, float, float]] = []
+        k = 0
+        for c in range(count):
+            i, j = int(out_ij[c, 0]), int(out_ij[c, 1])
+            result.extend(motions[k:i])
+            result.extend((float(out_roll[c, m]), float(out_curv[c, m]), float(out_len[c, m]))
+                          for m in range(int(out_n[c])))
+            end_roll = float(knots[j, 3])
+            result.append((end_roll, float(self.robot.roll_model.curvature(end_roll)), 0.0))
+            k = j
+        result.extend(motions[k:])
+        return result
 
     def _motions(
         self, node_f: np.ndarray, node_i: np.ndarray, result: int,
@@ -323,14 +376,6 @@ class HybridAStar:
 
     def _densify(self, start: Pose, motions: list[tuple[float, float, float]], spacing: float) -> np.ndarray:
         """Dense poses (x, y, yaw, roll, direction) along the motions, ≤ ``spacing`` apart."""
-        x, y, yaw = start
-        roll = 0.0
-        out = [np.array([[x, y, yaw, roll, 0.0]])]
-        for held, curv, s in motions:
-            seg = sample_motion(x, y, yaw, roll, held, curv, self.robot.radius_m, s, spacing)[1:]
-            if len(seg):
-                direction = np.full((len(seg), 1), 1.0 if s >= 0 else -1.0)
-                out.append(np.hstack([seg, direction]))
-                x, y, yaw, roll = seg[-1]
-        return np.vstack(out)
+        return densify_motions(np.array(start, float), np.array(motions, float).reshape(-1, 3),
+                               self.robot.radius_m, spacing)
 
