@@ -1,0 +1,78 @@
+"""``sphereplan plan``: plan a rollable path on a map and print the result JSON (DESIGN.md)."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+from typing import Any
+
+from planner.errors import InvalidInput, PlanningError
+from planner.mapio import load_any
+from planner.planning import plan_path
+from planner.plotting import plot_plan
+from planner.result import failure_json
+from planner.robot import load_robot
+from planner.search import PlannerOptions
+from service.cli import EXIT_BAD_INPUT, EXIT_NO_SOLUTION, EXIT_OK, EXIT_TIMEOUT
+from service.cli._io import emit_json, finite_float, positive_float
+
+VERB = "plan"
+HELP = "plan a path the sphere can roll from START to GOAL on a map"
+# start/goal outside the map or in collision: the caller's input is unusable (exit 2, like HTTP 400)
+BAD_ENDPOINT_CODES = (203, 204, 205, 206)
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--map", required=True, help="map file: ROS map_server YAML, or a mesh (.stl/.obj/.ply)")
+    parser.add_argument("--start", required=True, nargs=3, type=finite_float, metavar=("X", "Y", "YAW"))
+    parser.add_argument("--goal", required=True, nargs=3, type=finite_float, metavar=("X", "Y", "YAW"))
+    parser.add_argument("--robot", default=None, help="built-in profile name (default zju-60) or a TOML file")
+    parser.add_argument("--time-limit", type=positive_float, default=None, help="seconds (default 5)")
+    parser.add_argument("--options", default=None, help="JSON object of planner options, e.g. '{\"greed\": 1.0}'")
+    parser.add_argument("--reverse", action="store_true", help="allow reversing")
+    parser.add_argument("--out", default=None, help="write the JSON here instead of stdout")
+    parser.add_argument("--plot", default=None, help="write a PNG of the plan")
+    parser.set_defaults(func=run)
+
+
+def _options(args: argparse.Namespace) -> PlannerOptions:
+    data: dict[str, Any] = {}
+    if args.options:
+        try:
+            data = json.loads(args.options)
+        except json.JSONDecodeError as exc:
+            raise InvalidInput("--options", f"is not valid JSON: {exc}") from None
+        if not isinstance(data, dict):
+            raise InvalidInput("--options", "must be a JSON object")
+    if args.reverse:
+        data["allow_reverse"] = True
+    if args.time_limit is not None:
+        data["time_limit_s"] = args.time_limit
+    return PlannerOptions.from_dict(data)
+
+
+def run(args: argparse.Namespace) -> int:
+    robot = load_robot(args.robot)
+    options = _options(args)
+    if not Path(args.map).exists():
+        raise InvalidInput("--map", f"{args.map} does not exist")
+    grid = load_any(args.map, robot)
+    start, goal = tuple(args.start), tuple(args.goal)
+    try:
+        result = plan_path(grid, robot, start, goal, options)  # type: ignore[arg-type]
+    except PlanningError as exc:
+        emit_json(failure_json(exc.code, exc.msg, robot), args.out)
+        if args.plot:
+            plot_plan(grid, robot, None, start, goal, args.plot, title=f"{grid.name}: no path ({exc.code})")  # type: ignore[arg-type]
+        if exc.code in BAD_ENDPOINT_CODES:
+            sys.stderr.write(f"sphereplan plan: error: {exc.msg}\n")
+            return EXIT_BAD_INPUT
+        sys.stderr.write(f"sphereplan plan: {'timeout' if exc.code == 207 else 'no path'}: {exc.msg}\n")
+        return EXIT_TIMEOUT if exc.code == 207 else EXIT_NO_SOLUTION
+    emit_json(result.to_json(), args.out)
+    if args.plot:
+        plot_plan(grid, robot, result.states, start, goal, args.plot,  # type: ignore[arg-type]
+                  title=f"{grid.name}: {robot.name}, {result.length_m:.2f} m in {result.planning_time_s * 1000:.0f} ms")
+    return EXIT_OK
