@@ -131,13 +131,20 @@ def check_problem(grid: OccupancyGrid, dist: np.ndarray, problem: ProblemSpec) -
         assert labels[sy, sx] != labels[gy, gx], f"{name}: goal reachable through a {gap} m gap"
 
 
+def _pose_json(pose: tuple[float, float, float]) -> list[float]:
+    """[x, y, yaw]: positions rounded to 0.1 mm; yaw wrapped into [-π, π) (OMPL's SO2 interval: it
+    rejects +π) and not rounded (a rounded π would fall outside it)."""
+    yaw = (pose[2] + PI) % (2 * PI) - PI
+    return [round(pose[0], 4), round(pose[1], 4), yaw]
+
+
 def problem(name: str, map_file: str, start: tuple[float, float, float], goal: tuple[float, float, float],
             solvable: bool = True) -> ProblemSpec:
     return {
         "name": name,
         "map": map_file,
-        "start": [round(v, 4) for v in start],
-        "goal": [round(v, 4) for v in goal],
+        "start": _pose_json(start),
+        "goal": _pose_json(goal),
         "solvable": solvable,
         "time_limit_s": TIME_LIMIT_S,
     }

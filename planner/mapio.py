@@ -138,7 +138,10 @@ def _parse_params(doc: dict[str, Any]) -> dict[str, Any]:
 
 
 def _read_image(path: Path) -> tuple[np.ndarray, np.ndarray | None]:
-    """Read a PGM or PNG; returns (rgb (h, w, 3) in [0, 255], alpha (h, w) in [0, 255] or None), floats."""
+    """Read a PGM or PNG; returns (colour (h, w, 1 or 3) in [0, 255], alpha (h, w) in [0, 255] or None).
+
+    A grey image comes back with one channel, which stands for three equal R, G, B channels.
+    """
     if not path.is_file():
         raise MapError("image", f"image file {str(path)!r} does not exist")
     try:
@@ -158,7 +161,12 @@ def _read_image(path: Path) -> tuple[np.ndarray, np.ndarray | None]:
                 maxval = 65535.0 if grey.max(initial=0) > 255 or mode.startswith("I;16") else 255.0
                 grey = grey * (255.0 / maxval)
                 return np.repeat(grey[:, :, None], 3, axis=2), None
-            has_alpha = mode in ("LA", "RGBA", "PA") or "transparency" in img.info
+            if mode == "L" and "transparency" not in img.info:  # the common case: grey, one channel
+                return np.asarray(img, dtype=np.float64)[:, :, None], None
+            if mode == "LA":
+                la = np.asarray(img, dtype=np.float64)
+                return la[:, :, :1], la[:, :, 1]
+            has_alpha = mode in ("RGBA", "PA") or "transparency" in img.info
             rgba = np.asarray(img.convert("RGBA" if has_alpha else "RGB"), dtype=np.float64)
     except MapError:
         raise
@@ -179,13 +187,14 @@ def decode_pixels(
 ) -> np.ndarray:
     """Turn image pixels (row 0 = top) into occupancy values (row 0 = top) by nav2's rules.
 
-    ``rgb``: (h, w, 3) channel values in [0, 255]; ``alpha``: (h, w) in [0, 255] (255 = opaque) or None.
-    Returns an int8 (h, w) array of 0..100 / −1.
+    ``rgb``: (h, w, 3) channel values in [0, 255], or (h, w, 1) for grey (= three equal channels);
+    ``alpha``: (h, w) in [0, 255] (255 = opaque) or None. Returns an int8 (h, w) array of 0..100 / −1.
     """
+    rgb_sum = rgb[:, :, 0] * 3.0 if rgb.shape[2] == 1 else rgb.sum(axis=2)
     if mode == "trinary" and alpha is not None:
-        shade = (rgb.sum(axis=2) + alpha) / (4.0 * 255.0)
+        shade = (rgb_sum + alpha) / (4.0 * 255.0)
     else:
-        shade = rgb.sum(axis=2) / (3.0 * 255.0)
+        shade = rgb_sum / (3.0 * 255.0)
     occ = shade if negate else 1.0 - shade
     if mode == "trinary":
         out = np.where(occ > occupied_thresh, OCCUPIED, np.where(occ < free_thresh, 0, UNKNOWN))

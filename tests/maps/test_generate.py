@@ -81,6 +81,7 @@ def test_problem_sets_are_sensible() -> None:
         for p in items:
             (sx, sy), (gx, gy) = (grid.world_to_cell(*p.start[:2]), grid.world_to_cell(*p.goal[:2]))
             assert dist[sy, sx] >= 0.8 and dist[gy, gx] >= 0.8, p.name
+            assert all(-np.pi <= yaw < np.pi for yaw in (p.start[2], p.goal[2])), p.name  # OMPL's SO2
             if p.solvable:
                 assert wide[sy, sx] == wide[gy, gx] != 0, p.name
             else:
