@@ -110,7 +110,7 @@ def bench_ompl(problem: Problem, grid: OccupancyGrid, robot: RobotProfile, plann
     for st, pose in ((start, problem.start), (goal, problem.goal)):
         st.setX(pose[0])
         st.setY(pose[1])
-        st.setYaw(pose[2])
+        st.setYaw(math.remainder(pose[2], 2 * math.pi) if pose[2] < math.pi else -math.pi)  # OMPL: [−π, π)
     setup.setStartAndGoalStates(start, goal, 0.1)
     planner = og.BITstar(info) if planner_name == "BIT*" else og.RRTstar(info)
     setup.setPlanner(planner)
