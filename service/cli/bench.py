@@ -38,8 +38,12 @@ def run(args: argparse.Namespace) -> int:
 
     planners = 1 + (args.ompl_time > 0) + (args.rrt_time > 0)
     with tqdm(total=len(problems) * planners, file=sys.stderr, desc="bench") as bar:
-        rows = run_bench(problems, robot, args.runs, args.ompl_time, args.rrt_time,
-                         progress=lambda msg: (bar.set_postfix_str(msg[:40]), bar.update(1)))
+
+        def progress(msg: str) -> None:
+            bar.set_postfix_str(msg[:40])
+            bar.update(1)
+
+        rows = run_bench(problems, robot, args.runs, args.ompl_time, args.rrt_time, progress=progress)
     print(format_table(rows))
     garage = next((p for p in problems if p.map.startswith("garage") and p.solvable), None)
     if garage is not None:

@@ -1,5 +1,6 @@
 """Three-circle footprint coverage and the conservative clearance map (paper 001 §4.1)."""
 
+import itertools
 import math
 
 import numpy as np
@@ -24,7 +25,7 @@ def test_circles_cover_the_footprint_rectangle():
 def test_more_circles_cover_less_redundant_area():
     robot = load_robot("zju-60")
     radii = [CircleFootprint.for_robot(robot, n).radius_m for n in (1, 2, 3, 4)]
-    assert all(a > b for a, b in zip(radii, radii[1:], strict=False))
+    assert all(a > b for a, b in itertools.pairwise(radii))
 
 
 def test_clearance_margin_is_conservative_against_the_raw_grid():

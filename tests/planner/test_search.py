@@ -127,12 +127,12 @@ def test_timeout_and_cancel(planner):
 
 
 def test_options_validation():
-    with pytest.raises(InvalidInput, match="options.n_rolls"):
+    with pytest.raises(InvalidInput, match=r"options\.n_rolls"):
         PlannerOptions.from_dict({"n_rolls": 4})
-    with pytest.raises(InvalidInput, match="options.bogus"):
+    with pytest.raises(InvalidInput, match=r"options\.bogus"):
         PlannerOptions.from_dict({"bogus": 1})
-    with pytest.raises(InvalidInput, match="options.greed"):
+    with pytest.raises(InvalidInput, match=r"options\.greed"):
         PlannerOptions.from_dict({"greed": "fast"})
-    with pytest.raises(InvalidInput, match="options.time_limit_s"):
+    with pytest.raises(InvalidInput, match=r"options\.time_limit_s"):
         PlannerOptions.from_dict({"time_limit_s": -1.0})
     assert PlannerOptions.from_dict({"greed": 1}).greed == 1.0
