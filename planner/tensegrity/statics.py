@@ -56,6 +56,8 @@ ANGLE_TOL = 1e-9
 FORCE_TOL = 1e-9
 #: A contact angle this close (rad) to 0 or π puts the body on a corner (two link ends).
 CORNER_TOL = 1e-7
+#: Below this (× r) the centre of mass has no direction in the rolling link's plane: neutral balance.
+NEUTRAL_TOL = 1e-9
 #: Closed form and energy minimum must agree to this many degrees for ``verified``.
 VERIFY_TOL_DEG = 0.05
 
@@ -148,6 +150,31 @@ def paper_reaction_forces(state: int, phi: float, theta1: float, theta2: float, 
     return big * (-1.0 + bracket) - small, big * (-1.0 - bracket) - small
 
 
+def resting_states(up_b: np.ndarray, radius_m: float, tol: float = 1e-6) -> set[int]:
+    """The hybrid states an orientation (up vector in {b}) physically belongs to, from its lowest points.
+
+    Each link's lowest point is an interior arc point or an end (support function, ``lowest_depth``);
+    links within ``tol``·r of the lowest depth touch the ground. An interior contact on one link with an
+    end of the other is one state; two ends (a corner) belong to both neighbouring states.
+    """
+    w = -np.asarray(up_b, dtype=float)
+    touches = {}
+    for link, (x, y) in ((1, (w[0], w[1])), (2, (w[2], -w[1]))):
+        angle = math.atan2(y, x) if y >= 0 else (0.0 if x >= 0 else math.pi)
+        touches[link] = (float(np.hypot(x, y)) if y >= 0 else abs(x), angle)
+    deepest = max(d for d, _ in touches.values())
+    contacts = {link: a for link, (d, a) in touches.items() if d >= deepest - tol}
+    if len(contacts) < 2:
+        return set()
+    out = set()
+    for spec in STATES.values():
+        pivot = contacts[spec.pivot_link]
+        rolling = contacts[spec.rolling_link]
+        if abs(pivot - spec.pivot_angle_rad) <= tol and -tol <= rolling <= math.pi + tol:
+            out.add(spec.state)
+    return out
+
+
 def _corner_problem(state: int, phi: float, theta1: float, theta2: float, params: TexplorParams) -> str:
     """Why a state whose contact sits on an end of its rolling link is not at rest ("" if it is).
 
@@ -209,7 +236,7 @@ class StateEquilibrium:
             "F_r_paper": list(self.paper_forces_n),
             "R_sb": self.r_sb.tolist(),
             "T_sb": t_sb.tolist(),
-            "energy_min_deg_error": self.energy_min_deg_error,
+            "energy_min_deg_error": None if math.isnan(self.energy_min_deg_error) else self.energy_min_deg_error,
             "verified": self.verified,
         }
 
@@ -223,7 +250,9 @@ def solve_state(state: int, theta1: float, theta2: float, params: TexplorParams,
     closed form's verdict (feasible and a minimum, or infeasible and the body rolls away).
     """
     spec = STATES[state]
-    raw = closed_form_angle(state, theta1, theta2, params)
+    com = centre_of_mass(theta1, theta2, params)
+    neutral = float(np.hypot(com[1], com[0] if spec.rolling_link == 1 else com[2])) < NEUTRAL_TOL * params.radius_m
+    raw = math.pi / 2 if neutral else closed_form_angle(state, theta1, theta2, params)
     on_arc = -ANGLE_TOL <= raw <= math.pi + ANGLE_TOL
     phi = min(max(raw, 0.0), math.pi)
     phi1, phi2 = contact_angles(state, phi if on_arc else raw)
@@ -231,7 +260,7 @@ def solve_state(state: int, theta1: float, theta2: float, params: TexplorParams,
     forces = reaction_forces(state, phi1, phi2, theta1, theta2, params)
     paper_forces = paper_reaction_forces(state, phi1 if spec.rolling_link == 1 else phi2, theta1, theta2, params)
     reason = ""
-    corner = _corner_problem(state, phi, theta1, theta2, params) if on_arc else ""
+    corner = _corner_problem(state, phi, theta1, theta2, params) if on_arc and not neutral else ""
     if not on_arc:
         end = "A" if raw < 0 and abs(raw) < math.pi / 2 else "B"
         reason = (
@@ -243,12 +272,17 @@ def solve_state(state: int, theta1: float, theta2: float, params: TexplorParams,
     elif min(forces) < -FORCE_TOL:
         reason = "the centre of mass lies outside the contact segment (a reaction force is negative)"
     feasible = not reason
+    if neutral:
+        reason = (
+            "neutral: the centre of mass lies on the normal of the rolling link's plane through O_b, "
+            "so every contact angle balances; 90 deg reported"
+        )
     error = math.nan
     verified = False
     if verify:
         u = local_minimum(z_b, theta1, theta2, params)
         error = angle_deg(u, z_b)
-        verified = (error <= VERIFY_TOL_DEG) == feasible
+        verified = error <= VERIFY_TOL_DEG if feasible else state not in resting_states(u, params.radius_m)
     r = params.radius_m
     return StateEquilibrium(
         state=state,
