@@ -23,7 +23,7 @@ from planner.tensegrity.geometry import G, TexplorParams, centre_of_mass, lowest
 
 
 def potential_energy(up_b: np.ndarray, theta1: float, theta2: float, params: TexplorParams) -> np.ndarray:
-    """U(u) in joules for up vectors ``up_b`` (shape (..., 3), normalised here) and slider angles θ1, θ2 (rad)."""
+    """U(u) (J) for up vectors ``up_b`` (shape (..., 3), normalised here) and slider angles θ1, θ2 (rad)."""
     u = np.asarray(up_b, dtype=float)
     u = u / np.linalg.norm(u, axis=-1, keepdims=True)
     com = centre_of_mass(theta1, theta2, params)

@@ -15,6 +15,7 @@ path's degrees (ends have four cables) and keep every anchor on the semicircle.
 
 from __future__ import annotations
 
+import itertools
 import math
 from typing import Any
 
@@ -38,7 +39,7 @@ PAPER_LENGTHS_IN = (5.8551, 5.5412)
 def cables() -> list[tuple[str, str]]:
     """The 12 cables as (link-1 anchor, link-2 anchor), in Euler-path order."""
     out = []
-    for u, v in zip(EULER_PATH, EULER_PATH[1:], strict=False):
+    for u, v in itertools.pairwise(EULER_PATH):
         one, two = (u, v) if u.endswith("1") else (v, u)
         out.append((one[0], two[0]))
     return out
@@ -111,9 +112,7 @@ def form_find(
     t12 = np.eye(4)
     t12[:3, :3], t12[:3, 3] = rotation, offset
     rot_err = math.degrees(Rotation.from_matrix(rotation @ R12.T).magnitude())
-    grad = np.array(
-        [(energy(eq3 + h) - energy(eq3 - h)) / 2e-7 for h in np.eye(6) * 1e-7]
-    )
+    grad = np.array([(energy(eq3 + h) - energy(eq3 - h)) / 2e-7 for h in np.eye(6) * 1e-7])
     labels = [f"{a}1-{b}2" for a, b in cables()]
     edge = [i for i, (a, b) in enumerate(cables()) if a in "AB" and b in "AB"]
     middle = [i for i in range(12) if i not in edge]
@@ -128,7 +127,12 @@ def form_find(
         "rotation_error_deg_vs_eq3": rot_err,
         "centre_offset_m": offset.tolist(),
         "cables": [
-            {"cable": lab, "length_m": float(ln), "free_length_m": float(f), "tension_n": float(k * max(ln - f, 0.0))}
+            {
+                "cable": lab,
+                "length_m": float(ln),
+                "free_length_m": float(f),
+                "tension_n": float(k * max(ln - f, 0.0)),
+            }
             for lab, ln, f, k in zip(labels, lengths, free, stiffness, strict=True)
         ],
         "edge_edge_length_m": float(np.mean(lengths[edge])),

@@ -22,6 +22,7 @@ The initial body pose is eq. 16 (Rodrigues, no yaw) with O_b above the origin.
 
 from __future__ import annotations
 
+import itertools
 import math
 from collections.abc import Iterator
 from dataclasses import dataclass
@@ -39,7 +40,13 @@ from planner.tensegrity.geometry import (
     rodrigues_up,
     rot_z,
 )
-from planner.tensegrity.statics import STATES, closed_form_angle, contact_angles, reaction_forces, surface_normal
+from planner.tensegrity.statics import (
+    STATES,
+    closed_form_angle,
+    contact_angles,
+    reaction_forces,
+    surface_normal,
+)
 
 #: Forward and reverse state rings (paper 002 §II-E).
 FORWARD_RING = (1, 3, 2, 4)
@@ -79,7 +86,9 @@ class Rectangle:
 def make_rectangle(corner_rad: float, params: TexplorParams) -> Rectangle:
     """The rectangle with θ1 corners at ``corner_rad`` and π − ``corner_rad``; raises if impossible."""
     if not 0.0 < corner_rad < math.pi / 2:
-        raise InvalidInput("corner", f"must be strictly between 0 and 90 degrees, got {math.degrees(corner_rad):.3f}")
+        raise InvalidInput(
+            "corner", f"must be strictly between 0 and 90 degrees, got {math.degrees(corner_rad):.3f}"
+        )
     b = boundary_theta2(corner_rad, params)
     if not 0.0 <= b < math.pi / 2 - 1e-6:
         raise InvalidInput(
@@ -219,7 +228,7 @@ class _Gait:
 
     @staticmethod
     def split(sigma: float) -> tuple[int, float]:
-        leg = int(math.floor(sigma))
+        leg = math.floor(sigma)
         if leg > 0 and sigma == leg:
             return leg - 1, 1.0
         return leg, sigma - leg
@@ -267,7 +276,9 @@ def plan_gait(
         raise InvalidInput("measure", f"must be 'net' or 'rolled', got {measure!r}")
     params = params_from_profile(profile)
     section = profile.extra.get("texplor", {})
-    corner = math.radians(corner_deg if corner_deg is not None else float(section.get("gait_corner_deg", 45.0)))
+    corner = math.radians(
+        corner_deg if corner_deg is not None else float(section.get("gait_corner_deg", 45.0))
+    )
     speed = float(section.get("slider_speed_rad_s", 0.5))
     rect = make_rectangle(corner, params)
     forward = distance_m > 0
@@ -299,17 +310,33 @@ def plan_gait(
         sigma = leg + s
         samples.append(
             Sample(
-                t_s, theta1, theta2, state, phi1, phi2, rotation, centre,
-                gait.rolled(sigma), net(sigma), reaction_forces(state, phi1, phi2, theta1, theta2, params), params,
+                t_s,
+                theta1,
+                theta2,
+                state,
+                phi1,
+                phi2,
+                rotation,
+                centre,
+                gait.rolled(sigma),
+                net(sigma),
+                reaction_forces(state, phi1, phi2, theta1, theta2, params),
+                params,
             )
         )
     sequence = [samples[0].state]
     transitions = []
-    for prev, cur in zip(samples, samples[1:], strict=False):
+    for prev, cur in itertools.pairwise(samples):
         if cur.state != prev.state:
             sequence.append(cur.state)
             transitions.append(
-                {"from": prev.state, "to": cur.state, "t": cur.t_s, "theta1_rad": cur.theta1, "theta2_rad": cur.theta2}
+                {
+                    "from": prev.state,
+                    "to": cur.state,
+                    "t": cur.t_s,
+                    "theta1_rad": cur.theta1,
+                    "theta2_rad": cur.theta2,
+                }
             )
     return {
         "robot": profile.name,

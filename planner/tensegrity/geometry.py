@@ -56,13 +56,18 @@ class TexplorParams:
 
 def _positive_number(section: dict[str, Any], key: str, default: float) -> float:
     value = section.get(key, default)
-    if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value) or value <= 0:
+    if (
+        isinstance(value, bool)
+        or not isinstance(value, int | float)
+        or not math.isfinite(value)
+        or value <= 0
+    ):
         raise RobotProfileError(f"texplor.{key}", f"must be a finite number > 0, got {value!r}")
     return float(value)
 
 
 def params_from_profile(profile: RobotProfile) -> TexplorParams:
-    """Read the ``[texplor]`` section of a profile (defaults: the paper's prototype, 431 g arcs, 427 g sliders).
+    """Read a profile's ``[texplor]`` section (defaults: the paper's prototype, 431 g arcs, 427 g sliders).
 
     The arc radius is the profile's ``radius_m``. Keys: ``link_mass_kg``, ``slider_mass_kg`` (both arcs /
     both sliders alike) or the per-link ``link1_mass_kg`` … ``slider2_mass_kg``.
@@ -109,12 +114,10 @@ def link_tangent(link: int, angle_rad: float, radius_m: float) -> np.ndarray:
 
 
 def mass_points(theta1: float, theta2: float, params: TexplorParams) -> tuple[np.ndarray, np.ndarray]:
-    """Body-frame positions (m, shape (4, 3)) and masses (kg, shape (4,)) of slider 1, slider 2, link 1, link 2."""
+    """Positions in {b} (m, shape (4, 3)) and masses (kg, (4,)) of slider 1, slider 2, link 1, link 2."""
     r = params.radius_m
     link_com = np.array([0.0, 2.0 * r / math.pi, 0.0])
-    points = np.stack(
-        [link_point(1, theta1, r), link_point(2, theta2, r), link_com, R12 @ link_com]
-    )
+    points = np.stack([link_point(1, theta1, r), link_point(2, theta2, r), link_com, R12 @ link_com])
     masses = np.array([*params.slider_mass_kg, *params.link_mass_kg], dtype=float)
     return points, masses
 

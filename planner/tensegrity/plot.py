@@ -19,7 +19,7 @@ from planner.tensegrity.statics import STATES, closed_form_angle
 
 
 def contact_angle_map(state: int, params: TexplorParams, n: int = 121) -> tuple[np.ndarray, np.ndarray]:
-    """(grid in degrees (n,), contact angle in degrees (n, n) [θ2, θ1], NaN where the state is off its arc)."""
+    """(grid (deg, shape (n,)), contact angle (deg, shape (n, n), [θ2, θ1]), NaN where off the arc)."""
     grid = np.linspace(0.0, math.pi, n)
     out = np.full((n, n), np.nan)
     for j, t2 in enumerate(grid):
@@ -45,7 +45,9 @@ def plot_gait(result: dict[str, Any], params: TexplorParams, path: str | Path) -
     for state, ax in zip((1, 2, 3, 4), (axes[0, 0], axes[0, 1], axes[1, 0], axes[1, 1]), strict=True):
         grid_deg, angles = contact_angle_map(state, params)
         image = ax.pcolormesh(grid_deg, grid_deg, angles, vmin=0, vmax=180, cmap="viridis", shading="auto")
-        ax.contour(np.degrees(fine), np.degrees(fine), cy, levels=[0.0], colors="red", linestyles=":", linewidths=2)
+        ax.contour(
+            np.degrees(fine), np.degrees(fine), cy, levels=[0.0], colors="red", linestyles=":", linewidths=2
+        )
         rolling = STATES[state].rolling_link
         th1 = np.degrees([s["theta1_rad"] for s in steps])
         th2 = np.degrees([s["theta2_rad"] for s in steps])
@@ -61,7 +63,12 @@ def plot_gait(result: dict[str, Any], params: TexplorParams, path: str | Path) -
         ax.set_xlim(0, 180)
         ax.set_ylim(0, 180)
     if image is not None:
-        fig.colorbar(image, ax=axes[:, :2].ravel().tolist(), shrink=0.8, label="contact angle of the rolling link (deg)")
+        fig.colorbar(
+            image,
+            ax=axes[:, :2].ravel().tolist(),
+            shrink=0.8,
+            label="contact angle of the rolling link (deg)",
+        )
     ax = axes[0, 2]
     centre = np.array([s["centre_m"] for s in steps])
     q1 = np.array([s["q1_ground_m"] for s in steps])

@@ -137,7 +137,9 @@ def reaction_forces(
     return f1, weight - f1
 
 
-def paper_reaction_forces(state: int, phi: float, theta1: float, theta2: float, params: TexplorParams) -> tuple[float, float]:
+def paper_reaction_forces(
+    state: int, phi: float, theta1: float, theta2: float, params: TexplorParams
+) -> tuple[float, float]:
     """F_r1, F_r2 (N) exactly as printed in eq. 12–15 (M, m = mean slider and link mass)."""
     big = sum(params.slider_mass_kg) / 2.0 * G
     small = sum(params.link_mass_kg) / 2.0 * G
@@ -236,12 +238,16 @@ class StateEquilibrium:
             "F_r_paper": list(self.paper_forces_n),
             "R_sb": self.r_sb.tolist(),
             "T_sb": t_sb.tolist(),
-            "energy_min_deg_error": None if math.isnan(self.energy_min_deg_error) else self.energy_min_deg_error,
+            "energy_min_deg_error": None
+            if math.isnan(self.energy_min_deg_error)
+            else self.energy_min_deg_error,
             "verified": self.verified,
         }
 
 
-def solve_state(state: int, theta1: float, theta2: float, params: TexplorParams, verify: bool = True) -> StateEquilibrium:
+def solve_state(
+    state: int, theta1: float, theta2: float, params: TexplorParams, verify: bool = True
+) -> StateEquilibrium:
     """Closed-form equilibrium of ``state`` at slider angles θ1, θ2 (rad), checked against the energy.
 
     ``feasible``: the closed-form contact angle lies on the rolling link (0 ≤ φ ≤ π) and both reaction
@@ -251,14 +257,18 @@ def solve_state(state: int, theta1: float, theta2: float, params: TexplorParams,
     """
     spec = STATES[state]
     com = centre_of_mass(theta1, theta2, params)
-    neutral = float(np.hypot(com[1], com[0] if spec.rolling_link == 1 else com[2])) < NEUTRAL_TOL * params.radius_m
+    neutral = (
+        float(np.hypot(com[1], com[0] if spec.rolling_link == 1 else com[2])) < NEUTRAL_TOL * params.radius_m
+    )
     raw = math.pi / 2 if neutral else closed_form_angle(state, theta1, theta2, params)
     on_arc = -ANGLE_TOL <= raw <= math.pi + ANGLE_TOL
     phi = min(max(raw, 0.0), math.pi)
     phi1, phi2 = contact_angles(state, phi if on_arc else raw)
     z_b = surface_normal(state, phi1, phi2)
     forces = reaction_forces(state, phi1, phi2, theta1, theta2, params)
-    paper_forces = paper_reaction_forces(state, phi1 if spec.rolling_link == 1 else phi2, theta1, theta2, params)
+    paper_forces = paper_reaction_forces(
+        state, phi1 if spec.rolling_link == 1 else phi2, theta1, theta2, params
+    )
     reason = ""
     corner = _corner_problem(state, phi, theta1, theta2, params) if on_arc and not neutral else ""
     if not on_arc:
@@ -301,14 +311,18 @@ def solve_state(state: int, theta1: float, theta2: float, params: TexplorParams,
     )
 
 
-def equilibria(theta1: float, theta2: float, params: TexplorParams, verify: bool = True) -> list[StateEquilibrium]:
+def equilibria(
+    theta1: float, theta2: float, params: TexplorParams, verify: bool = True
+) -> list[StateEquilibrium]:
     """The four states' solutions at slider angles θ1, θ2 (rad)."""
     theta1 = check_mass_angle("theta1", theta1)
     theta2 = check_mass_angle("theta2", theta2)
     return [solve_state(s, theta1, theta2, params, verify) for s in STATES]
 
 
-def static_equilibria(theta1: float, theta2: float, profile: RobotProfile, verify: bool = True) -> dict[str, Any]:
+def static_equilibria(
+    theta1: float, theta2: float, profile: RobotProfile, verify: bool = True
+) -> dict[str, Any]:
     """What ``sphereplan tensegrity static`` prints: the four states at slider angles θ1, θ2 (rad).
 
     Besides the per-state closed form it scans the potential energy for all its minima

@@ -20,8 +20,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     sub = parser.add_subparsers(dest="tensegrity_command", required=True)
 
     static = sub.add_parser("static", help="the four hybrid static states for slider angles θ1, θ2")
-    static.add_argument("--theta1", type=finite_float, required=True, help="slider 1 angle (rad, or deg with --degrees)")
-    static.add_argument("--theta2", type=finite_float, required=True, help="slider 2 angle (rad, or deg with --degrees)")
+    static.add_argument(
+        "--theta1", type=finite_float, required=True, help="slider 1 angle (rad, or deg with --degrees)"
+    )
+    static.add_argument(
+        "--theta2", type=finite_float, required=True, help="slider 2 angle (rad, or deg with --degrees)"
+    )
     static.add_argument("--degrees", action="store_true", help="θ1, θ2 are in degrees")
     static.add_argument("--no-verify", action="store_true", help="skip the potential-energy cross-check")
     static.add_argument("--robot", default="texplor", help="profile name or TOML path (default texplor)")
@@ -34,7 +38,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     gait.add_argument("--start-state", type=int, default=1, help="hybrid state at the start (1-4, default 1)")
     gait.add_argument("--corner", type=finite_float, help="slider path corner θ1 in degrees (default 45)")
     gait.add_argument(
-        "--measure", choices=("net", "rolled"), default="net",
+        "--measure",
+        choices=("net", "rolled"),
+        default="net",
         help="distance = net advance of the centre (default) or rolled contact length Σ r|Δφ|",
     )
     gait.add_argument("--robot", default="texplor", help="profile name or TOML path (default texplor)")
@@ -43,7 +49,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     gait.set_defaults(func=_run_gait)
 
     formfind = sub.add_parser("formfind", help="cable-energy form finding (eq. 18): T12 and cable lengths")
-    formfind.add_argument("--fix-centre", action="store_true", help="keep the arc centres coincident (o12 = 0)")
+    formfind.add_argument(
+        "--fix-centre", action="store_true", help="keep the arc centres coincident (o12 = 0)"
+    )
     formfind.add_argument("--starts", type=int, default=16, help="optimiser starts (default 16)")
     formfind.add_argument("--seed", type=int, default=0, help="seed of the random starts")
     formfind.add_argument("--robot", default="texplor", help="profile name or TOML path (default texplor)")
@@ -54,7 +62,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def _run_static(args: argparse.Namespace) -> int:
     to_rad = math.radians if args.degrees else float
-    result = static_equilibria(to_rad(args.theta1), to_rad(args.theta2), load_robot(args.robot), not args.no_verify)
+    result = static_equilibria(
+        to_rad(args.theta1), to_rad(args.theta2), load_robot(args.robot), not args.no_verify
+    )
     emit_json(result, args.out)
     return 0
 

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import itertools
 import math
 
 import numpy as np
@@ -18,7 +19,7 @@ R = PROFILE.radius_m
 
 def _pairs(result: dict) -> list[tuple[int, int]]:
     seq = result["state_sequence"]
-    return list(zip(seq, seq[1:], strict=False))
+    return list(itertools.pairwise(seq))
 
 
 @pytest.mark.parametrize("distance", [0.05, 0.7, 2.3, -0.7, -2.3])
@@ -40,7 +41,7 @@ def test_gait_reaches_distance_with_allowed_transitions(distance: float, measure
     advance = float(np.sum(np.diff(centre, axis=0) @ heading))
     assert advance == pytest.approx(result["net_displacement_m"], abs=1e-9)
     rolled = 0.0
-    for prev, cur in zip(steps, steps[1:], strict=False):
+    for prev, cur in itertools.pairwise(steps):
         if prev["state"] == cur["state"]:
             key = "phi1_rad" if cur["state"] in (1, 2) else "phi2_rad"
             rolled += R * abs(cur[key] - prev[key])
@@ -56,7 +57,7 @@ def test_contacts_stay_on_ground_pivot_fixed_and_no_slip() -> None:
         assert s["centre_m"][2] == pytest.approx(R / math.sqrt(2), abs=1e-12)
         assert s["F_r1"] >= 0 and s["F_r2"] >= 0
     worst_slip = 0.0
-    for prev, cur in zip(steps, steps[1:], strict=False):
+    for prev, cur in itertools.pairwise(steps):
         if prev["state"] != cur["state"]:
             assert np.allclose(prev["T_sb"], cur["T_sb"], atol=1e-12)  # transitions do not jump
             continue
@@ -75,7 +76,7 @@ def test_contacts_stay_on_ground_pivot_fixed_and_no_slip() -> None:
         # the contact's ground trace: arc of radius r*sqrt(2) about the pivot, length r*|dphi|
         qa, qb = (np.array(s[f"q{rolling_link}_ground_m"]) - np.array(cur[pivot]) for s in (prev, cur))
         assert np.linalg.norm(qa) == pytest.approx(R * math.sqrt(2))
-        swept = math.acos(min(1.0, float(qa @ qb) / (np.linalg.norm(qa) * np.linalg.norm(qb))))
+        swept = math.acos(min(1.0, float(qa @ qb / (np.linalg.norm(qa) * np.linalg.norm(qb)))))
         assert R * math.sqrt(2) * swept == pytest.approx(R * dphi, rel=1e-6)
     assert worst_slip < 0.02
 
@@ -89,7 +90,7 @@ def test_forward_then_reverse_full_cycles_move_along_a_line() -> None:
 
 def test_slider_path_is_monotone_in_contact_angle() -> None:
     steps = plan_gait(1.1, PROFILE, steps=50)["steps"]
-    for prev, cur in zip(steps, steps[1:], strict=False):
+    for prev, cur in itertools.pairwise(steps):
         if prev["state"] == cur["state"]:
             assert cur["net_m"] >= prev["net_m"] - 1e-12
             assert cur["rolled_m"] >= prev["rolled_m"] - 1e-12

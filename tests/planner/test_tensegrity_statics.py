@@ -12,8 +12,8 @@ from planner.robot import load_robot
 from planner.tensegrity import static_equilibria
 from planner.tensegrity.energy import angle_deg, potential_energy
 from planner.tensegrity.geometry import (
-    G,
     R12,
+    G,
     TexplorParams,
     centre_of_mass,
     link_point,
@@ -100,23 +100,31 @@ def test_every_energy_minimum_is_a_closed_form_state() -> None:
 def test_equal_masses_reduce_to_the_paper_tan_formula() -> None:
     for theta1, theta2 in GRID:
         for s in equilibria(theta1, theta2, PARAMS, verify=False):
-            if s.feasible and not s.reason and 1e-6 < (s.phi1_rad if s.state < 3 else s.phi2_rad) < math.pi - 1e-6:
+            if (
+                s.feasible
+                and not s.reason
+                and 1e-6 < (s.phi1_rad if s.state < 3 else s.phi2_rad) < math.pi - 1e-6
+            ):
                 mine = s.phi1_rad if s.state < 3 else s.phi2_rad
                 assert mine == pytest.approx(paper_contact_angle(s.state, theta1, theta2), abs=1e-12)
 
 
 def test_rolling_links_split_the_slider_plane() -> None:
     # sin θ1 > sin θ2: the centre of mass is on link 1's side, so only states 1, 2 rest
-    states = {s.state for s in equilibria(math.radians(80), math.radians(20), PARAMS, verify=False) if s.feasible}
+    states = {
+        s.state for s in equilibria(math.radians(80), math.radians(20), PARAMS, verify=False) if s.feasible
+    }
     assert states == {1, 2}
-    states = {s.state for s in equilibria(math.radians(20), math.radians(80), PARAMS, verify=False) if s.feasible}
+    states = {
+        s.state for s in equilibria(math.radians(20), math.radians(80), PARAMS, verify=False) if s.feasible
+    }
     assert states == {3, 4}
 
 
 def test_unequal_masses_agree_with_energy_and_keep_forces_positive() -> None:
     rng = np.random.default_rng(11)
     for _ in range(6):
-        params = TexplorParams(0.2, tuple(rng.uniform(0.1, 3.0, 2)), tuple(rng.uniform(0.05, 1.0, 2)))  # type: ignore[arg-type]
+        params = TexplorParams(0.2, tuple(rng.uniform(0.1, 3.0, 2)), tuple(rng.uniform(0.05, 1.0, 2)))
         theta1, theta2 = rng.uniform(0.0, math.pi, 2)
         sols = equilibria(theta1, theta2, params)
         assert any(s.feasible for s in sols)

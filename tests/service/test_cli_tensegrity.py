@@ -36,7 +36,23 @@ def test_static_bad_angle_exit_2(capsys: pytest.CaptureFixture[str]) -> None:
 
 def test_gait_writes_json_and_plot(tmp_path: Path) -> None:
     out, png = tmp_path / "g.json", tmp_path / "g.png"
-    assert main(["tensegrity", "gait", "--distance", "0.8", "--steps", "12", "--out", str(out), "--plot", str(png)]) == 0
+    assert (
+        main(
+            [
+                "tensegrity",
+                "gait",
+                "--distance",
+                "0.8",
+                "--steps",
+                "12",
+                "--out",
+                str(out),
+                "--plot",
+                str(png),
+            ]
+        )
+        == 0
+    )
     result = json.loads(out.read_text())
     assert result["net_displacement_m"] == pytest.approx(0.8)
     assert result["state_sequence"][:2] == [1, 3]
