@@ -30,7 +30,6 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     static.add_argument("--no-verify", action="store_true", help="skip the potential-energy cross-check")
     static.add_argument("--robot", default="texplor", help="profile name or TOML path (default texplor)")
     static.add_argument("--out", help="write the JSON here instead of stdout")
-    static.set_defaults(func=_run_static)
 
     gait = sub.add_parser("gait", help="slider trajectories that roll the robot a distance")
     gait.add_argument("--distance", type=finite_float, required=True, help="metres; negative = reverse gait")
@@ -46,7 +45,6 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     gait.add_argument("--robot", default="texplor", help="profile name or TOML path (default texplor)")
     gait.add_argument("--out", help="write the JSON here instead of stdout")
     gait.add_argument("--plot", help="write a Fig. 9-style PNG here")
-    gait.set_defaults(func=_run_gait)
 
     formfind = sub.add_parser("formfind", help="cable-energy form finding (eq. 18): T12 and cable lengths")
     formfind.add_argument(
@@ -56,8 +54,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     formfind.add_argument("--seed", type=int, default=0, help="seed of the random starts")
     formfind.add_argument("--robot", default="texplor", help="profile name or TOML path (default texplor)")
     formfind.add_argument("--out", help="write the JSON here instead of stdout")
-    formfind.set_defaults(func=_run_formfind)
-    parser.set_defaults(func=_run_static)
+    parser.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    """Dispatch ``sphereplan tensegrity static|gait|formfind``; returns the exit code."""
+    commands = {"static": _run_static, "gait": _run_gait, "formfind": _run_formfind}
+    return commands[args.tensegrity_command](args)
 
 
 def _run_static(args: argparse.Namespace) -> int:
