@@ -60,7 +60,7 @@ def _robot_for(plan: dict[str, Any], robot: RobotProfile | str | None) -> RobotP
     return load_robot(name) if name else load_robot(None)
 
 
-def _cross_track(path_xy: np.ndarray, pts: np.ndarray) -> np.ndarray:
+def cross_track_distance(path_xy: np.ndarray, pts: np.ndarray) -> np.ndarray:
     """Distance (m) from each point (m, 2) to the path polyline (n, 2): nearest vertex's adjacent pieces."""
     tree = cKDTree(path_xy)
     _, idx = tree.query(pts)
@@ -210,9 +210,8 @@ def simulate_plan(
         # 2. tracker on the estimate
         seg = ref.segments[seg_i]
         s_proj = seg.project(est.x, est.y, s_proj)
-        if seg.remaining(est.x, est.y) <= opts.goal_tolerance_m or (
-            seg.length_m - s_proj <= opts.goal_tolerance_m and seg.length_m > 0
-        ):
+        to_go = seg.length_m - s_proj
+        if to_go <= opts.goal_tolerance_m or (to_go < 0.5 and seg.remaining(est.x, est.y) <= opts.goal_tolerance_m):
             cmd = Command(0.0, float(seg.roll[-1]))
             if abs(state.v) < 1e-3:
                 if seg_i + 1 == len(ref.segments):
@@ -241,7 +240,7 @@ def simulate_plan(
     es = np.array(est_rows)
     od = np.array(odo_rows)
     end = ref.end
-    xt = _cross_track(ref.polyline(), tr[:, 1:3])
+    xt = cross_track_distance(ref.polyline(), tr[:, 1:3])
     est_err = np.hypot(*(es[:, 1:3] - tr[:, 1:3]).T)
     odo_err = np.hypot(*(od[:, 1:3] - tr[:, 1:3]).T)
     clearance = footprint_clearance(grid, rob, tr[:, 1:4])
@@ -303,4 +302,4 @@ def bench_mpc(robot: str = "zju-60", horizons: tuple[int, ...] = (10, 15, 20), s
     return rows
 
 
-__all__ = ["SimulationOptions", "bench_mpc", "footprint_clearance", "simulate_plan"]
+__all__ = ["SimulationOptions", "bench_mpc", "cross_track_distance", "footprint_clearance", "simulate_plan"]

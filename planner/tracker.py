@@ -392,9 +392,9 @@ class PurePursuitTracker:
         dx, dy = float(tx) - est.x, float(ty) - est.y
         dist = math.hypot(dx, dy)
         heading = est.yaw if seg.direction > 0 else est.yaw + math.pi
-        rem = seg.remaining(est.x, est.y)
-        speed = min(float(speed_profile(seg, s0, self.cruise, self.brake)),
-                    math.sqrt(2 * self.brake * max(rem, 0.0)))
+        speed = float(speed_profile(seg, s0, self.cruise, self.brake))
+        if seg.length_m - s0 < 0.5:  # near the end: also stop on passing the end line (loops end at the start)
+            speed = min(speed, math.sqrt(2 * self.brake * max(seg.remaining(est.x, est.y), 0.0)))
         if dist < 0.05:
             return Command(seg.direction * speed, float(troll))
         alpha = wrap(math.atan2(dy, dx) - heading)
