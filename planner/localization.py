@@ -58,7 +58,9 @@ class FilterParams:
     init_yaw_rad: float = math.radians(2.0)
 
 
-def odometry_step(pose: np.ndarray, inc: OdometryIncrement, robot: RobotProfile) -> tuple[np.ndarray, np.ndarray]:
+def odometry_step(
+    pose: np.ndarray, inc: OdometryIncrement, robot: RobotProfile
+) -> tuple[np.ndarray, np.ndarray]:
     """Eq. 2 over one period: the next pose (3,) = (x, y, θ) and the Jacobian A = ∂f/∂(x, y, θ) (3, 3)."""
     ds = inc.wheel_distance_m
     d_roll = inc.roll_end_rad - inc.roll_start_rad
@@ -91,8 +93,9 @@ class FusionFilter:
 
     _H = np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
 
-    def __init__(self, robot: RobotProfile, pose: tuple[float, float, float], params: FilterParams | None = None
-                 ) -> None:
+    def __init__(
+        self, robot: RobotProfile, pose: tuple[float, float, float], params: FilterParams | None = None
+    ) -> None:
         self.robot = robot
         self.params = params or FilterParams()
         p = self.params

@@ -12,8 +12,10 @@ from planner.occupancy import OccupancyGrid
 from planner.simulate import cross_track_distance
 
 
-def plot_simulation(grid: OccupancyGrid, plan_json: dict[str, Any], sim: dict[str, Any], out: str | Path) -> None:
-    """Write a PNG of ``sim`` (the :func:`~planner.simulate.simulate_plan` result) over ``grid`` to ``out``."""
+def plot_simulation(
+    grid: OccupancyGrid, plan_json: dict[str, Any], sim: dict[str, Any], out: str | Path
+) -> None:
+    """Write a PNG of ``sim`` (a :func:`~planner.simulate.simulate_plan` result) over ``grid`` to ``out``."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -32,8 +34,15 @@ def plot_simulation(grid: OccupancyGrid, plan_json: dict[str, Any], sim: dict[st
     ax = fig.add_subplot(gs[:, 0])
     ox, oy, _ = grid.origin
     w, h = grid.size_m
-    ax.imshow(np.where(grid.blocked(), 0.15, 1.0), cmap="gray", vmin=0, vmax=1, origin="lower",
-              extent=(ox, ox + w, oy, oy + h), interpolation="nearest")
+    ax.imshow(
+        np.where(grid.blocked(), 0.15, 1.0),
+        cmap="gray",
+        vmin=0,
+        vmax=1,
+        origin="lower",
+        extent=(ox, ox + w, oy, oy + h),
+        interpolation="nearest",
+    )
     if len(gn):
         ax.plot(gn[:, 0], gn[:, 1], ".", color="0.6", ms=2, label="GNSS fixes")
     ax.plot(path[:, 0], path[:, 1], "k--", lw=1.2, label="planned path")
@@ -59,7 +68,9 @@ def plot_simulation(grid: OccupancyGrid, plan_json: dict[str, Any], sim: dict[st
     )
 
     ae = fig.add_subplot(gs[0, 1])
-    ae.plot(tr[:, 0], cross_track_distance(path, tr[:, 1:3]) * 100, color="tab:blue", label="cross-track (true)")
+    ae.plot(
+        tr[:, 0], cross_track_distance(path, tr[:, 1:3]) * 100, color="tab:blue", label="cross-track (true)"
+    )
     ae.plot(tr[:, 0], np.hypot(*(es - tr[:, 1:3]).T) * 100, color="tab:green", label="fused estimate error")
     ae.plot(tr[:, 0], np.hypot(*(od - tr[:, 1:3]).T) * 100, ":", color="tab:red", label="odometry error")
     ae.set_ylabel("error (cm)")

@@ -123,8 +123,12 @@ def _rows(arr: np.ndarray, keys: tuple[str, ...]) -> list[dict[str, float]]:
 
 
 def simulate_plan(
-    grid: OccupancyGrid, plan_json: dict[str, Any], robot: RobotProfile | str | None = None, seed: int = 0,
-    noise: str | Disturbances = "default", options: SimulationOptions | None = None,
+    grid: OccupancyGrid,
+    plan_json: dict[str, Any],
+    robot: RobotProfile | str | None = None,
+    seed: int = 0,
+    noise: str | Disturbances = "default",
+    options: SimulationOptions | None = None,
 ) -> dict[str, Any]:
     """Roll ``plan_json`` (plan result with ``states``) on ``grid`` in closed loop; return the SIM.json dict.
 
@@ -141,7 +145,9 @@ def simulate_plan(
     if not (opts.control_rate_hz > 0 and math.isfinite(opts.control_rate_hz)):
         raise InvalidInput("control_rate_hz", "must be a finite number > 0")
     ref = ReferencePath(plan_json["states"])
-    rng_slip, rng_imu, rng_gnss, rng_init = (np.random.default_rng(s) for s in np.random.SeedSequence(seed).spawn(4))
+    rng_slip, rng_imu, rng_gnss, rng_init = (
+        np.random.default_rng(s) for s in np.random.SeedSequence(seed).spawn(4)
+    )
 
     dt = 1.0 / opts.control_rate_hz
     sim = SphereSimulator(rob, opts.substeps)
@@ -156,8 +162,11 @@ def simulate_plan(
     e_yaw = float(rng_init.normal(0.0, dist.init_yaw_rad)) if dist.init_yaw_rad > 0 else 0.0
     state = SphereState(x0 + e_xy[0], y0 + e_xy[1], yaw0 + e_yaw, roll0, 0.0)
     odo = WheelOdometry(rob, (x0, y0, yaw0))
-    kf = FusionFilter(rob, (x0, y0, yaw0), FilterParams(**{**opts.filter.__dict__,
-                                                           "gnss_sigma_m": max(dist.gnss_noise_m, 0.005)}))
+    kf = FusionFilter(
+        rob,
+        (x0, y0, yaw0),
+        FilterParams(**{**opts.filter.__dict__, "gnss_sigma_m": max(dist.gnss_noise_m, 0.005)}),
+    )
 
     def imu(roll: float) -> float:
         n = rng_imu.normal(0.0, dist.imu_roll_noise_rad) if dist.imu_roll_noise_rad > 0 else 0.0
@@ -188,7 +197,9 @@ def simulate_plan(
         # 1. sensors → localisation (eq. 2, eq. 3)
         imu_now = imu(state.roll) if k > 0 else imu_prev
         if k > 0:
-            enc = wheel_dist * (1.0 + (rng_slip.normal(0.0, dist.encoder_noise) if dist.encoder_noise > 0 else 0.0))
+            enc = wheel_dist * (
+                1.0 + (rng_slip.normal(0.0, dist.encoder_noise) if dist.encoder_noise > 0 else 0.0)
+            )
             inc = OdometryIncrement(enc, imu_prev, imu_now)
             odo.update(inc)
             kf.predict(inc)
@@ -211,7 +222,9 @@ def simulate_plan(
         seg = ref.segments[seg_i]
         s_proj = seg.project(est.x, est.y, s_proj)
         to_go = seg.length_m - s_proj
-        if to_go <= opts.goal_tolerance_m or (to_go < 0.5 and seg.remaining(est.x, est.y) <= opts.goal_tolerance_m):
+        if to_go <= opts.goal_tolerance_m or (
+            to_go < 0.5 and seg.remaining(est.x, est.y) <= opts.goal_tolerance_m
+        ):
             cmd = Command(0.0, float(seg.roll[-1]))
             if abs(state.v) < 1e-3:
                 if seg_i + 1 == len(ref.segments):
@@ -282,8 +295,12 @@ def simulate_plan(
     }
 
 
-def bench_mpc(robot: str = "zju-60", horizons: tuple[int, ...] = (10, 15, 20), steps: int = 250,
-              qpsols: tuple[str, ...] = ("qrqp",)) -> list[dict[str, Any]]:
+def bench_mpc(
+    robot: str = "zju-60",
+    horizons: tuple[int, ...] = (10, 15, 20),
+    steps: int = 250,
+    qpsols: tuple[str, ...] = ("qrqp",),
+) -> list[dict[str, Any]]:
     """Time the MPC step in closed loop on an S-curve (noise-free): one row per (horizon, QP solver) with
     solve-time percentiles in ms. ``steps`` control periods per row. Prints nothing; see the CLI."""
     from planner.synthetic_paths import s_curve_plan
@@ -296,9 +313,17 @@ def bench_mpc(robot: str = "zju-60", horizons: tuple[int, ...] = (10, 15, 20), s
         for n in horizons:
             opts = SimulationOptions(mpc=MPCParams(horizon=n, qpsol=qp), time_limit_s=steps / 50.0)
             m = simulate_plan(grid, plan, rob, seed=0, noise="none", options=opts)["metrics"]
-            rows.append({"robot": robot, "qpsol": qp, "horizon": n, "steps": m["steps"],
-                         "p50_ms": m["mpc_solve_ms_p50"], "p95_ms": m["mpc_solve_ms_p95"],
-                         "fallback_steps": m["fallback_steps"]})
+            rows.append(
+                {
+                    "robot": robot,
+                    "qpsol": qp,
+                    "horizon": n,
+                    "steps": m["steps"],
+                    "p50_ms": m["mpc_solve_ms_p50"],
+                    "p95_ms": m["mpc_solve_ms_p95"],
+                    "fallback_steps": m["fallback_steps"],
+                }
+            )
     return rows
 
 

@@ -124,8 +124,9 @@ class SphereSimulator:
             return math.tan(roll) / model.radius_m
         return float(model.curvature(roll))
 
-    def step(self, state: SphereState, v_cmd: float, roll_cmd: float, dt_s: float, ground_factor: float = 1.0
-             ) -> StepResult:
+    def step(
+        self, state: SphereState, v_cmd: float, roll_cmd: float, dt_s: float, ground_factor: float = 1.0
+    ) -> StepResult:
         """Advance ``state`` by ``dt_s`` seconds under the command (wheel speed m/s, roll rad).
 
         ``ground_factor`` multiplies the wheel speed to give the ground speed (slip; 1 = pure rolling).
@@ -149,13 +150,22 @@ class SphereSimulator:
             v1 = v + float(np.clip(v_cmd - v, -max_dv, max_dv))
             roll_rate = (roll1 - roll) / h
 
-            def rhs(f: float, th: float, v0: float = v, v1_: float = v1, p0: float = roll, p1: float = roll1,
-                    rate: float = roll_rate) -> tuple[float, float, float]:
+            def rhs(
+                f: float,
+                th: float,
+                v0: float = v,
+                v1_: float = v1,
+                p0: float = roll,
+                p1: float = roll1,
+                rate: float = roll_rate,
+            ) -> tuple[float, float, float]:
                 vg = (v0 + f * (v1_ - v0)) * ground_factor
                 k = self._kappa(p0 + f * (p1 - p0))
-                return (vg * math.cos(th) - r * rate * math.sin(th),
-                        vg * math.sin(th) + r * rate * math.cos(th),
-                        vg * k)
+                return (
+                    vg * math.cos(th) - r * rate * math.sin(th),
+                    vg * math.sin(th) + r * rate * math.cos(th),
+                    vg * k,
+                )
 
             k1 = rhs(0.0, yaw)
             k2 = rhs(0.5, yaw + 0.5 * h * k1[2])

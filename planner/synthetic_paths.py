@@ -21,8 +21,12 @@ from planner.robot import RobotProfile
 
 
 def _roll_path(
-    robot: RobotProfile, segments: Sequence[tuple[float, float]], start: tuple[float, float, float],
-    speed_m_s: float, ramp_rate: float, step_m: float = 0.002,
+    robot: RobotProfile,
+    segments: Sequence[tuple[float, float]],
+    start: tuple[float, float, float],
+    speed_m_s: float,
+    ramp_rate: float,
+    step_m: float = 0.002,
 ) -> np.ndarray:
     """Integrate eq. 1 over arc length; rows (s, x, y, yaw, roll, curvature), one per ``step_m``."""
     x, y, yaw = start
@@ -48,15 +52,23 @@ def _roll_path(
     return np.array(rows)
 
 
-def _as_plan(robot: RobotProfile, rows: np.ndarray, speed_m_s: float, spacing_m: float, name: str) -> dict[str, Any]:
+def _as_plan(
+    robot: RobotProfile, rows: np.ndarray, speed_m_s: float, spacing_m: float, name: str
+) -> dict[str, Any]:
     every = max(1, int(spacing_m / (rows[1, 0] - rows[0, 0]) + 1e-9)) if len(rows) > 1 else 1
     keep = list(range(0, len(rows), every))
     if keep[-1] != len(rows) - 1:
         keep.append(len(rows) - 1)
     states = [
         {
-            "x": float(r[1]), "y": float(r[2]), "yaw": float(r[3]), "roll": float(r[4]), "v": speed_m_s,
-            "t": float(r[0] / speed_m_s), "s": float(r[0]), "curvature": float(r[5]),
+            "x": float(r[1]),
+            "y": float(r[2]),
+            "yaw": float(r[3]),
+            "roll": float(r[4]),
+            "v": speed_m_s,
+            "t": float(r[0] / speed_m_s),
+            "s": float(r[0]),
+            "curvature": float(r[5]),
         }
         for r in rows[keep]
     ]
@@ -72,8 +84,13 @@ def _as_plan(robot: RobotProfile, rows: np.ndarray, speed_m_s: float, spacing_m:
 
 
 def plan_from_rolls(
-    robot: RobotProfile, segments: Sequence[tuple[float, float]], start: tuple[float, float, float] = (0.0, 0.0, 0.0),
-    speed_m_s: float | None = None, spacing_m: float = 0.025, ramp_rate: float | None = None, name: str = "synthetic",
+    robot: RobotProfile,
+    segments: Sequence[tuple[float, float]],
+    start: tuple[float, float, float] = (0.0, 0.0, 0.0),
+    speed_m_s: float | None = None,
+    spacing_m: float = 0.025,
+    ramp_rate: float | None = None,
+    name: str = "synthetic",
 ) -> dict[str, Any]:
     """A plan that rolls ``segments`` [(length m, roll rad), ...] from ``start`` (x, y, yaw) at ``speed_m_s``.
 
@@ -86,35 +103,46 @@ def plan_from_rolls(
     return _as_plan(robot, rows, v, spacing_m, name)
 
 
-def straight_plan(robot: RobotProfile, length_m: float = 3.0, start: tuple[float, float, float] = (0.0, 0.0, 0.0)
-                  ) -> dict[str, Any]:
+def straight_plan(
+    robot: RobotProfile, length_m: float = 3.0, start: tuple[float, float, float] = (0.0, 0.0, 0.0)
+) -> dict[str, Any]:
     """A straight line of ``length_m`` along the start heading."""
     return plan_from_rolls(robot, [(length_m, 0.0)], start, name="straight")
 
 
-def arc_plan(robot: RobotProfile, angle_rad: float = math.pi / 2, lead_m: float = 0.5,
-             start: tuple[float, float, float] = (0.0, 0.0, 0.0)) -> dict[str, Any]:
+def arc_plan(
+    robot: RobotProfile,
+    angle_rad: float = math.pi / 2,
+    lead_m: float = 0.5,
+    start: tuple[float, float, float] = (0.0, 0.0, 0.0),
+) -> dict[str, Any]:
     """A lead-in straight, then a left arc at the maximum roll (minimum turning radius) turning ``angle_rad``
     (the ramp-in included), then a short straight."""
     rate = 0.5 * robot.max_roll_rate_rad_s
     ramp_m = robot.max_roll_rad / rate * robot.max_speed_m_s
     k = robot.max_curvature
     hold = max(0.0, angle_rad / k - ramp_m)
-    return plan_from_rolls(robot, [(lead_m, 0.0), (hold + ramp_m, robot.max_roll_rad), (lead_m, 0.0)], start,
-                           name="arc")
+    return plan_from_rolls(
+        robot, [(lead_m, 0.0), (hold + ramp_m, robot.max_roll_rad), (lead_m, 0.0)], start, name="arc"
+    )
 
 
 def s_curve_plan(robot: RobotProfile, start: tuple[float, float, float] = (0.0, 0.0, 0.0)) -> dict[str, Any]:
     """Left then right at 80 % of the maximum roll, with straights before, between and after."""
     roll = 0.8 * robot.max_roll_rad
     turn_m = (math.pi / 3) / float(robot.roll_model.curvature(roll))
-    return plan_from_rolls(robot, [(0.5, 0.0), (turn_m, roll), (turn_m, -roll), (0.5, 0.0)], start,
-                           name="s-curve")
+    return plan_from_rolls(
+        robot, [(0.5, 0.0), (turn_m, roll), (turn_m, -roll), (0.5, 0.0)], start, name="s-curve"
+    )
 
 
 def track_plan(
-    robot: RobotProfile, width_m: float = 16.2, height_m: float = 8.4, corner_radius_m: float = 1.5,
-    origin: tuple[float, float] = (0.0, 0.0), speed_m_s: float | None = None,
+    robot: RobotProfile,
+    width_m: float = 16.2,
+    height_m: float = 8.4,
+    corner_radius_m: float = 1.5,
+    origin: tuple[float, float] = (0.0, 0.0),
+    speed_m_s: float | None = None,
 ) -> dict[str, Any]:
     """One clockwise lap of paper 001's rectangular track (§6, Fig. 7): 16.2 m × 8.4 m, rounded corners.
 
@@ -126,8 +154,11 @@ def track_plan(
     from planner.errors import InvalidInput
 
     if corner_radius_m < robot.min_turning_radius_m - 1e-9:
-        raise InvalidInput("corner_radius_m", f"{corner_radius_m} m is tighter than the robot's minimum turning "
-                           f"radius {robot.min_turning_radius_m:.3f} m")
+        raise InvalidInput(
+            "corner_radius_m",
+            f"{corner_radius_m} m is tighter than the robot's minimum turning "
+            f"radius {robot.min_turning_radius_m:.3f} m",
+        )
     v = robot.max_speed_m_s if speed_m_s is None else speed_m_s
     rate = 0.5 * robot.max_roll_rate_rad_s
     roll_c = -float(robot.roll_model.roll_for_curvature(1.0 / corner_radius_m))

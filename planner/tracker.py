@@ -80,8 +80,12 @@ class ReferenceSegment:
     def sample(self, s: np.ndarray | float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """(x, y, yaw, roll) at arc lengths ``s`` (clamped to the segment)."""
         q = np.clip(np.asarray(s, dtype=float), 0.0, self.length_m)
-        return (np.interp(q, self.s, self.x), np.interp(q, self.s, self.y), np.interp(q, self.s, self.yaw),
-                np.interp(q, self.s, self.roll))
+        return (
+            np.interp(q, self.s, self.x),
+            np.interp(q, self.s, self.y),
+            np.interp(q, self.s, self.yaw),
+            np.interp(q, self.s, self.roll),
+        )
 
     def project(self, x: float, y: float, s_hint: float, back_m: float = 0.3, ahead_m: float = 1.5) -> float:
         """Arc length of the point nearest (x, y) among the pieces within [s_hint − back, s_hint + ahead]."""
@@ -90,7 +94,7 @@ class ReferenceSegment:
         lo = max(0, int(np.searchsorted(self.s, s_hint - back_m)) - 1)
         hi = min(len(self.s) - 1, int(np.searchsorted(self.s, s_hint + ahead_m)) + 1)
         ax, ay = self.x[lo:hi], self.y[lo:hi]
-        bx, by = self.x[lo + 1:hi + 1], self.y[lo + 1:hi + 1]
+        bx, by = self.x[lo + 1 : hi + 1], self.y[lo + 1 : hi + 1]
         dx, dy = bx - ax, by - ay
         l2 = dx * dx + dy * dy
         t = np.clip(((x - ax) * dx + (y - ay) * dy) / np.where(l2 > 0, l2, 1.0), 0.0, 1.0)
@@ -111,8 +115,18 @@ class ReferencePath:
         if not isinstance(states, list) or len(states) < 2:
             raise InvalidInput("path.states", "needs at least two states")
         try:
-            arr = np.array([[float(s["x"]), float(s["y"]), float(s["yaw"]), float(s.get("roll", 0.0)),
-                             float(s.get("v", 0.0))] for s in states])
+            arr = np.array(
+                [
+                    [
+                        float(s["x"]),
+                        float(s["y"]),
+                        float(s["yaw"]),
+                        float(s.get("roll", 0.0)),
+                        float(s.get("v", 0.0)),
+                    ]
+                    for s in states
+                ]
+            )
         except (KeyError, TypeError, ValueError) as exc:
             raise InvalidInput("path.states", f"every state needs numeric x, y, yaw ({exc})") from None
         if not np.all(np.isfinite(arr)):
@@ -137,7 +151,9 @@ class ReferencePath:
         for i in range(1, len(direction) + 1):
             if i == len(direction) or direction[i] != direction[start]:
                 idx = slice(start, i + 1)
-                self.segments.append(ReferenceSegment(arr[idx, :2], arr[idx, 2], arr[idx, 3], int(direction[start])))
+                self.segments.append(
+                    ReferenceSegment(arr[idx, :2], arr[idx, 2], arr[idx, 3], int(direction[start]))
+                )
                 start = i
 
     @property
@@ -150,8 +166,9 @@ class ReferencePath:
         return self.states[:, :2]
 
 
-def speed_profile(seg: ReferenceSegment, s: np.ndarray | float, cruise_m_s: float, brake_m_s2: float
-                  ) -> np.ndarray:
+def speed_profile(
+    seg: ReferenceSegment, s: np.ndarray | float, cruise_m_s: float, brake_m_s2: float
+) -> np.ndarray:
     """Reference speed magnitude (m/s) along ``seg``: ``cruise`` capped so the robot can stop at the end."""
     rem = np.maximum(seg.length_m - np.asarray(s, dtype=float), 0.0)
     return np.minimum(cruise_m_s, np.sqrt(2.0 * brake_m_s2 * rem))
@@ -166,7 +183,9 @@ class ObstacleCircles:
         interior = pad[:-2, 1:-1] & pad[2:, 1:-1] & pad[1:-1, :-2] & pad[1:-1, 2:]
         iy, ix = np.nonzero(blocked & ~interior)
         res = grid.resolution_m
-        self.centres = np.stack([grid.origin[0] + (ix + 0.5) * res, grid.origin[1] + (iy + 0.5) * res], axis=1)
+        self.centres = np.stack(
+            [grid.origin[0] + (ix + 0.5) * res, grid.origin[1] + (iy + 0.5) * res], axis=1
+        )
         self.radius_m = res / math.sqrt(2.0)
         self._tree = cKDTree(self.centres) if len(self.centres) else None
 
@@ -218,8 +237,9 @@ class MPCParams:
 class MPCTracker:
     """Eq. 15 of paper 001 as a CasADi multiple-shooting SQP, warm-started step to step."""
 
-    def __init__(self, robot: RobotProfile, params: MPCParams | None = None,
-                 obstacles: ObstacleCircles | None = None) -> None:
+    def __init__(
+        self, robot: RobotProfile, params: MPCParams | None = None, obstacles: ObstacleCircles | None = None
+    ) -> None:
         import casadi as ca
 
         self.robot = robot
@@ -248,11 +268,18 @@ class MPCTracker:
         xs, us = ca.SX.sym("x", 4), ca.SX.sym("u", 2)
         rate = (us[1] - xs[3]) / tau
         vk = us[0] * self._kappa(ca, xs[3])
-        f = ca.Function("f", [xs, us], [ca.vertcat(
-            us[0] * ca.cos(xs[2]) - r * rate * ca.sin(xs[2]),
-            us[0] * ca.sin(xs[2]) + r * rate * ca.cos(xs[2]),
-            vk,
-            rate)])
+        f = ca.Function(
+            "f",
+            [xs, us],
+            [
+                ca.vertcat(
+                    us[0] * ca.cos(xs[2]) - r * rate * ca.sin(xs[2]),
+                    us[0] * ca.sin(xs[2]) + r * rate * ca.cos(xs[2]),
+                    vk,
+                    rate,
+                )
+            ],
+        )
         k1 = f(xs, us)
         k2 = f(xs + dt / 2 * k1, us)
         k3 = f(xs + dt / 2 * k2, us)
@@ -305,8 +332,12 @@ class MPCTracker:
             "error_on_fail": False,
         }
         if p.qpsol == "qrqp":
-            opts["qpsol_options"] = {"print_iter": False, "print_header": False, "print_info": False,
-                                     "error_on_fail": False}
+            opts["qpsol_options"] = {
+                "print_iter": False,
+                "print_header": False,
+                "print_info": False,
+                "error_on_fail": False,
+            }
         elif p.qpsol == "osqp":
             opts["qpsol_options"] = {"osqp": {"verbose": False}, "error_on_fail": False}
         opts.update(p.extra_options)
@@ -315,10 +346,20 @@ class MPCTracker:
         self._nx = 4 * (n + 1)
         self._nu = 2 * n
         inf = np.inf
-        lbx = np.concatenate([np.tile([-inf, -inf, -inf, -rob.max_roll_rad], n + 1),
-                              np.tile([-rob.max_speed_m_s, -rob.max_roll_rad], n), np.zeros(n)])
-        ubx = np.concatenate([np.tile([inf, inf, inf, rob.max_roll_rad], n + 1),
-                              np.tile([rob.max_speed_m_s, rob.max_roll_rad], n), np.full(n, inf)])
+        lbx = np.concatenate(
+            [
+                np.tile([-inf, -inf, -inf, -rob.max_roll_rad], n + 1),
+                np.tile([-rob.max_speed_m_s, -rob.max_roll_rad], n),
+                np.zeros(n),
+            ]
+        )
+        ubx = np.concatenate(
+            [
+                np.tile([inf, inf, inf, rob.max_roll_rad], n + 1),
+                np.tile([rob.max_speed_m_s, rob.max_roll_rad], n),
+                np.full(n, inf),
+            ]
+        )
         self._lbx, self._ubx = lbx, ubx
 
     def reset(self) -> None:
@@ -362,7 +403,14 @@ class MPCTracker:
             w0[:4] = x0
         else:
             w0 = np.concatenate([np.concatenate([x0, xref.T.ravel()]), uref.T.ravel(), np.zeros(n)])
-        args: dict[str, Any] = {"x0": w0, "p": par, "lbx": lbx, "ubx": ubx, "lbg": self._lbg, "ubg": self._ubg}
+        args: dict[str, Any] = {
+            "x0": w0,
+            "p": par,
+            "lbx": lbx,
+            "ubx": ubx,
+            "lbg": self._lbg,
+            "ubg": self._ubg,
+        }
         if self._warm is not None:
             args["lam_x0"] = self._warm["lam_x"]
             args["lam_g0"] = self._warm["lam_g"]
@@ -374,14 +422,20 @@ class MPCTracker:
         if not ok or not np.all(np.isfinite(w)):
             self._warm = None
             return Command(0.0, est.roll, ok=False, solve_ms=ms)
-        self._warm = {"x": w, "lam_x": np.asarray(sol["lam_x"]).ravel(), "lam_g": np.asarray(sol["lam_g"]).ravel()}
+        self._warm = {
+            "x": w,
+            "lam_x": np.asarray(sol["lam_x"]).ravel(),
+            "lam_g": np.asarray(sol["lam_g"]).ravel(),
+        }
         return Command(float(w[self._nx]), float(w[self._nx + 1]), ok=True, solve_ms=ms)
 
 
 class PurePursuitTracker:
     """Geometric fallback: pure pursuit on the look-ahead point, speed from the stopping profile."""
 
-    def __init__(self, robot: RobotProfile, lookahead_m: float = 0.5, cruise_m_s: float | None = None) -> None:
+    def __init__(
+        self, robot: RobotProfile, lookahead_m: float = 0.5, cruise_m_s: float | None = None
+    ) -> None:
         self.robot = robot
         self.lookahead_m = lookahead_m
         self.cruise = min(robot.max_speed_m_s, cruise_m_s or robot.max_speed_m_s)
@@ -393,7 +447,9 @@ class PurePursuitTracker:
         dist = math.hypot(dx, dy)
         heading = est.yaw if seg.direction > 0 else est.yaw + math.pi
         speed = float(speed_profile(seg, s0, self.cruise, self.brake))
-        if seg.length_m - s0 < 0.5:  # near the end: also stop on passing the end line (loops end at the start)
+        if (
+            seg.length_m - s0 < 0.5
+        ):  # near the end: also stop on passing the end line (loops end at the start)
             speed = min(speed, math.sqrt(2 * self.brake * max(seg.remaining(est.x, est.y), 0.0)))
         if dist < 0.05:
             return Command(seg.direction * speed, float(troll))
