@@ -121,6 +121,7 @@ def run(args: argparse.Namespace) -> int:
 
     if not args.path and not args.track:
         raise InvalidInput("path", "give --path PLAN.json or --track")
+    given = _read_plan(args.path) if args.path else None
     if args.map:
         from planner.mapio import load_map  # the map loader (ROS map_server YAML + PGM)
 
@@ -143,7 +144,8 @@ def run(args: argparse.Namespace) -> int:
             )
         plan = track_plan(robot, corner_radius_m=args.corner_radius, origin=(x0, y0))
     else:
-        plan = _read_plan(args.path)
+        assert given is not None
+        plan = given
         robot = load_robot(args.robot) if args.robot else None
 
     options = SimulationOptions(
