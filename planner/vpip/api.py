@@ -62,7 +62,10 @@ def rods_report(
         "robot": profile.name,
         "params": {"r_m": params.r_m, "r_s": params.r_s, "l_max": params.l_max, "d_m_s": params.d_m_s},
         "inputs": {
-            "phi_vpip_rad": phi, "theta_vpip_rad": theta, "roll_rad": roll, "pitch_phase_rad": phase,
+            "phi_vpip_rad": phi,
+            "theta_vpip_rad": theta,
+            "roll_rad": roll,
+            "pitch_phase_rad": phase,
         },
         "rods": rods,
     }
@@ -124,7 +127,9 @@ def parse_runs_csv(text: str) -> tuple[list[float], list[float]]:
     roll_key = next((f for f in ("roll_deg", "roll_rad") if f in fields), None)
     size_key = next((f for f in ("diameter_m", "radius_m") if f in fields), None)
     if roll_key is None or size_key is None:
-        raise InvalidInput("runs", "CSV needs a header with roll_deg (or roll_rad) and diameter_m (or radius_m)")
+        raise InvalidInput(
+            "runs", "CSV needs a header with roll_deg (or roll_rad) and diameter_m (or radius_m)"
+        )
     rolls: list[float] = []
     radii: list[float] = []
     for line, row in enumerate(reader, start=2):
@@ -135,7 +140,9 @@ def parse_runs_csv(text: str) -> tuple[list[float], list[float]]:
         except (TypeError, ValueError):
             raise InvalidInput(f"runs line {line}", f"{roll_key} and {size_key} must be numbers") from None
         if not (math.isfinite(r) and math.isfinite(size)) or r <= 0 or size <= 0:
-            raise InvalidInput(f"runs line {line}", "roll and size must be finite and > 0 (left/right runs: use |roll|)")
+            raise InvalidInput(
+                f"runs line {line}", "roll and size must be finite and > 0 (left/right runs: use |roll|)"
+            )
         rolls.append(math.radians(r) if roll_key == "roll_deg" else r)
         radii.append(size / 2.0 if size_key == "diameter_m" else size)
     if not rolls:
@@ -177,8 +184,8 @@ def calibrate_report(runs_csv_text: str, robot: str | RobotProfile = "daedalus")
             "diameter_m": [2.0 * r for r in table_radius],
         },
         "table": fit,
-        "outside_range": "curvature is interpolated (PCHIP) from (0, 0) to the first run and held at the last "
-        "run's value beyond it",
+        "outside_range": "curvature is interpolated (PCHIP) from (0, 0) to the first run and held at "
+        "the last run's value beyond it",
         "min_turning_radius_m": model.turning_radius(model.max_table_roll_rad),
     }
 
@@ -225,6 +232,10 @@ def schedule_report(
     """
     if robot is None:
         embedded = plan.get("robot") if isinstance(plan, Mapping) else None
-        robot = str(embedded.get("name")) if isinstance(embedded, Mapping) and embedded.get("name") else "daedalus"
+        robot = (
+            str(embedded.get("name"))
+            if isinstance(embedded, Mapping) and embedded.get("name")
+            else "daedalus"
+        )
     profile = robot if isinstance(robot, RobotProfile) else load_robot(robot)
     return run_schedule(plan, profile, driver=driver)

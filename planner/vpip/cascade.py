@@ -24,7 +24,8 @@ steady error) and G_ω = 3 rad/s per rad (ω = 1 rad/s of paper §5 at θ_VPIP �
 band of paper Fig. 7) are assumptions; ``[vpip]`` keys ``plant_roll_gain``, ``plant_roll_natural_rad_s``,
 ``plant_roll_damping``, ``plant_omega_gain``, ``plant_omega_tau_s`` override them. The simple driver
 has no plane, so its rod targets (before the rod-speed limit, as the VPIP driver's plane is) are
-mapped to the plane angles that best reproduce them (:func:`rods.equivalent_plane`) and those drive the same plant. The sphere then moves by paper 001 eq. 1 with the profile's roll model:
+mapped to the plane angles that best reproduce them (:func:`rods.equivalent_plane`) and those drive
+the same plant. The sphere then moves by paper 001 eq. 1 with the profile's roll model:
 ``ẋ = v cos ψ − r φ̇ sin ψ``, ``ẏ = v sin ψ + r φ̇ cos ψ``, ``ψ̇ = v·κ(φ)``.
 
 Reverse motion (negative ``v`` in the plan) is not supported.
@@ -57,7 +58,9 @@ def vpip_section(profile: RobotProfile) -> Mapping[str, Any]:
     """The profile's ``[vpip]`` table; a profile without one cannot drive rods."""
     section = profile.extra.get("vpip")
     if not isinstance(section, Mapping):
-        raise InvalidInput("robot", f"profile {profile.name!r} has no [vpip] section (rod-driven robots only)")
+        raise InvalidInput(
+            "robot", f"profile {profile.name!r} has no [vpip] section (rod-driven robots only)"
+        )
     return section
 
 
@@ -116,7 +119,10 @@ class SurrogatePlant:
     def step(self, phi_vpip_rad: float, theta_vpip_rad: float, dt_s: float) -> None:
         p = self.p
         wn = p.roll_natural_rad_s
-        acc = wn * wn * (-p.roll_gain * phi_vpip_rad - self.roll_rad) - 2.0 * p.roll_damping * wn * self.roll_rate_rad_s
+        acc = (
+            wn * wn * (-p.roll_gain * phi_vpip_rad - self.roll_rad)
+            - 2.0 * p.roll_damping * wn * self.roll_rate_rad_s
+        )
         rate = self.roll_rate_rad_s + acc * dt_s
         self.roll_rate_rad_s = max(-p.roll_rate_rad_s, min(p.roll_rate_rad_s, rate))
         self.roll_rad += self.roll_rate_rad_s * dt_s
@@ -177,12 +183,18 @@ class PathReference:
             raise InvalidInput("path.states", "the path has zero length")
         v = _field(states, "v", False)
         if v is not None and np.any(v < 0):
-            raise InvalidInput("path.states.v", "reverse motion (v < 0) is not supported by the VPIP schedule")
+            raise InvalidInput(
+                "path.states.v", "reverse motion (v < 0) is not supported by the VPIP schedule"
+            )
         t = _field(states, "t", False)
         if t is None or np.any(np.diff(t[keep]) <= 0):
             t = s / profile.max_speed_m_s
         if v is None:
-            v = np.gradient(s[keep], t[keep]) if keep.sum() > 2 else np.full(int(keep.sum()), profile.max_speed_m_s)
+            v = (
+                np.gradient(s[keep], t[keep])
+                if keep.sum() > 2
+                else np.full(int(keep.sum()), profile.max_speed_m_s)
+            )
             v_full = np.interp(s, s[keep], v)
         else:
             v_full = v
@@ -271,14 +283,27 @@ def run_schedule(
     s_sim, phase, roll_des = float(ref.s[0]), 0.0, roll0
     s_goal = float(ref.s[-1])
     rec: dict[str, list[Any]] = {
-        k: [] for k in (
-            "t", "roll_desired_rad", "roll_rad", "omega_desired_rad_s", "omega_rad_s", "phi_vpip_rad",
-            "theta_vpip_rad", "pitch_phase_rad", "curvature_cmd", "x", "y", "yaw", "s", "rod_length_m",
+        k: []
+        for k in (
+            "t",
+            "roll_desired_rad",
+            "roll_rad",
+            "omega_desired_rad_s",
+            "omega_rad_s",
+            "phi_vpip_rad",
+            "theta_vpip_rad",
+            "pitch_phase_rad",
+            "curvature_cmd",
+            "x",
+            "y",
+            "yaw",
+            "s",
+            "rod_length_m",
         )
     }
     max_lat = 0.0
     reached = False
-    steps = int(math.ceil(limit_s / dt))
+    steps = math.ceil(limit_s / dt)
     for k in range(steps + 1):
         t = k * dt
         t_plan = ref.t[0] + t
@@ -312,9 +337,18 @@ def run_schedule(
                 params, targets, roll, phase, (roll_gains.output_limit, pitch_gains.output_limit)
             )
         for key, value in (
-            ("t", t), ("roll_desired_rad", roll_des), ("roll_rad", roll), ("omega_desired_rad_s", omega_des),
-            ("omega_rad_s", omega), ("phi_vpip_rad", phi_v), ("theta_vpip_rad", theta_v),
-            ("pitch_phase_rad", phase), ("curvature_cmd", k_cmd), ("x", x), ("y", y), ("yaw", yaw),
+            ("t", t),
+            ("roll_desired_rad", roll_des),
+            ("roll_rad", roll),
+            ("omega_desired_rad_s", omega_des),
+            ("omega_rad_s", omega),
+            ("phi_vpip_rad", phi_v),
+            ("theta_vpip_rad", theta_v),
+            ("pitch_phase_rad", phase),
+            ("curvature_cmd", k_cmd),
+            ("x", x),
+            ("y", y),
+            ("yaw", yaw),
             ("s", s_sim),
         ):
             rec[key].append(float(value))

@@ -52,7 +52,11 @@ class PIDGains:
 
 
 ROLL_GAINS = PIDGains(
-    kp=3.0, ki=2.0, kd=3.5, output_limit=math.radians(20.0), integral_limit=math.radians(5.0),
+    kp=3.0,
+    ki=2.0,
+    kd=3.5,
+    output_limit=math.radians(20.0),
+    integral_limit=math.radians(5.0),
     derivative_cutoff_hz=50.0,
 )
 """Table 1 roll PID: 3.0/2.0/3.5, 50 Hz derivative filter, |φ_VPIP| ≤ 20°, integral part ≤ 5°."""

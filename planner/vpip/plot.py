@@ -32,13 +32,21 @@ def plot_schedule(result: Mapping[str, Any], out: str | Path, plan: Mapping[str,
     ax_xy = fig.add_subplot(grid[:, 1])
     n = rods.shape[0]
     img = ax_rod.imshow(
-        rods, aspect="auto", origin="lower", interpolation="nearest", cmap="viridis",
-        extent=(float(t[0]), float(t[-1]), -0.5, n - 0.5), vmin=0.0, vmax=float(result["params"]["l_max"]),
+        rods,
+        aspect="auto",
+        origin="lower",
+        interpolation="nearest",
+        cmap="viridis",
+        extent=(float(t[0]), float(t[-1]), -0.5, n - 0.5),
+        vmin=0.0,
+        vmax=float(result["params"]["l_max"]),
     )
     ax_rod.axhline(n / 2 - 0.5, color="white", lw=0.8)
     ax_rod.set_yticks([n / 4 - 0.5, 3 * n / 4 - 0.5], ["left ring", "right ring"])
-    ax_rod.set_title(f"commanded rod lengths ({result['driver']} driver, rate-limited to "
-                     f"{result['params']['rod_speed_m_s']} m/s)")
+    ax_rod.set_title(
+        f"commanded rod lengths ({result['driver']} driver, rate-limited to "
+        f"{result['params']['rod_speed_m_s']} m/s)"
+    )
     fig.colorbar(img, ax=ax_rod, label="length (m)", pad=0.01)
     ax_roll.plot(t, deg(s["roll_desired_rad"]), "k--", lw=1.2, label="desired roll")
     ax_roll.plot(t, deg(s["roll_rad"]), "C0", lw=1.5, label="roll (surrogate plant)")

@@ -76,7 +76,9 @@ class RodParams:
             if not math.isfinite(value) or value <= 0:
                 raise RobotProfileError(f"vpip.{name}", f"must be a finite number > 0, got {value!r}")
         if self.r_s >= self.r_m:
-            raise RobotProfileError("vpip.r_s", f"must be smaller than r_m = {self.r_m} (eq. 7), got {self.r_s}")
+            raise RobotProfileError(
+                "vpip.r_s", f"must be smaller than r_m = {self.r_m} (eq. 7), got {self.r_s}"
+            )
         if self.rods_per_side < 1:
             raise RobotProfileError("vpip.rods_per_side", f"must be >= 1, got {self.rods_per_side}")
 
@@ -146,7 +148,7 @@ def skipped(zeta: np.ndarray) -> np.ndarray:
 
 
 def disc_centre(params: RodParams, phi_r: float, side: np.ndarray) -> np.ndarray:
-    """Side-disc centres ``p_m`` in the paper frame, eq. 9; ``phi_r`` is the paper's roll. Shape ``(n, 3)``."""
+    """Side-disc centres ``p_m`` (paper frame, eq. 9); ``phi_r`` is the paper's roll. Shape ``(n, 3)``."""
     d = params.d_m_s
     s = np.asarray(side, dtype=float)
     return np.stack(
@@ -157,9 +159,7 @@ def disc_centre(params: RodParams, phi_r: float, side: np.ndarray) -> np.ndarray
 def rod_direction(phi_r: float, zeta: np.ndarray) -> np.ndarray:
     """Unit rod directions in the paper frame, eq. 12 (``d_mt / r_s``). Shape ``(n, 3)``."""
     z = np.asarray(zeta, dtype=float)
-    return np.stack(
-        [-np.cos(z) * math.sin(phi_r), -np.sin(z), -np.cos(z) * math.cos(phi_r)], axis=-1
-    )
+    return np.stack([-np.cos(z) * math.sin(phi_r), -np.sin(z), -np.cos(z) * math.cos(phi_r)], axis=-1)
 
 
 def eq18_terms(
@@ -214,14 +214,18 @@ def rod_lengths(
     commanded lengths, held where |D| ≈ 0 (zero when not given).
     """
     for name, value in (
-        ("phi_vpip", phi_vpip_rad), ("theta_vpip", theta_vpip_rad), ("roll", roll_rad),
+        ("phi_vpip", phi_vpip_rad),
+        ("theta_vpip", theta_vpip_rad),
+        ("roll", roll_rad),
         ("pitch_phase", pitch_phase_rad),
     ):
         if not math.isfinite(value):
             raise InvalidInput(name, f"must be finite, got {value!r}")
     for name, value in (("phi_vpip", phi_vpip_rad), ("theta_vpip", theta_vpip_rad), ("roll", roll_rad)):
         if abs(value) >= 0.5 * math.pi:
-            raise InvalidInput(name, f"must be strictly between -90 and 90 degrees, got {math.degrees(value):.3g}")
+            raise InvalidInput(
+                name, f"must be strictly between -90 and 90 degrees, got {math.degrees(value):.3g}"
+            )
     zeta, side = rod_layout(pitch_phase_rad, params.rods_per_side)
     prev = np.zeros(params.n_rods) if previous_m is None else np.asarray(previous_m, dtype=float)
     if prev.shape != (params.n_rods,):
@@ -240,7 +244,9 @@ def rod_lengths(
     return RodCommand(zeta, side, raw, length, active, clamped, held)
 
 
-def rod_tips(params: RodParams, roll_rad: float, zeta: np.ndarray, side: np.ndarray, length_m: np.ndarray) -> np.ndarray:
+def rod_tips(
+    params: RodParams, roll_rad: float, zeta: np.ndarray, side: np.ndarray, length_m: np.ndarray
+) -> np.ndarray:
     """Rod tip positions (paper frame, m), shape ``(n, 3)``: eq. 12 with λ = r_s + l."""
     phi_r = -roll_rad
     return disc_centre(params, phi_r, side) + (params.r_s + np.asarray(length_m))[:, None] * rod_direction(
@@ -268,8 +274,12 @@ class RodDriver:
     def reset(self) -> None:
         self.lengths_m = np.zeros(self.params.n_rods)
 
-    def step(self, phi_vpip_rad: float, theta_vpip_rad: float, roll_rad: float, pitch_phase_rad: float) -> RodCommand:
-        cmd = rod_lengths(self.params, phi_vpip_rad, theta_vpip_rad, roll_rad, pitch_phase_rad, self.lengths_m)
+    def step(
+        self, phi_vpip_rad: float, theta_vpip_rad: float, roll_rad: float, pitch_phase_rad: float
+    ) -> RodCommand:
+        cmd = rod_lengths(
+            self.params, phi_vpip_rad, theta_vpip_rad, roll_rad, pitch_phase_rad, self.lengths_m
+        )
         self.lengths_m = rate_limit(cmd.length_m, self.lengths_m, self.params.rod_speed_m_s * self.dt_s)
         return cmd
 
@@ -304,7 +314,11 @@ def equivalent_plane(
     z, s = zeta[use], side[use]
     d = params.d_m_s
     n = np.tan(phi_v) * s * math.cos(phi_r) * d + params.r_m - s * math.sin(phi_r) * d
-    den = np.tan(phi_v) * np.cos(z) * math.sin(phi_r) + np.tan(theta_v) * np.sin(z) + np.cos(z) * math.cos(phi_r)
+    den = (
+        np.tan(phi_v) * np.cos(z) * math.sin(phi_r)
+        + np.tan(theta_v) * np.sin(z)
+        + np.cos(z) * math.cos(phi_r)
+    )
     with np.errstate(divide="ignore", invalid="ignore"):
         raw = np.where(np.abs(den) < D_EPS, 0.0, -params.r_s + n / np.where(np.abs(den) < D_EPS, 1.0, den))
     length = np.clip(raw, 0.0, params.l_max)

@@ -74,7 +74,12 @@ class SimpleDriver:
             length = np.where(on_extend & bottom, contact, length)
             length = np.where(~on_extend, 0.0, length)
         return RodCommand(
-            zeta, ground.side, ground.raw_length_m, length, ground.active, np.zeros_like(ground.clamped),
+            zeta,
+            ground.side,
+            ground.raw_length_m,
+            length,
+            ground.active,
+            np.zeros_like(ground.clamped),
             ground.held,
         )
 

@@ -24,8 +24,11 @@ def _angle(args: argparse.Namespace, value: float) -> float:
 def _rods(args: argparse.Namespace) -> int:
     emit_json(
         api.rods_report(
-            _angle(args, args.phi_vpip), _angle(args, args.theta_vpip), _angle(args, args.roll),
-            _angle(args, args.pitch_phase), args.robot,
+            _angle(args, args.phi_vpip),
+            _angle(args, args.theta_vpip),
+            _angle(args, args.roll),
+            _angle(args, args.pitch_phase),
+            args.robot,
         ),
         None,
     )
@@ -71,7 +74,9 @@ def _schedule(args: argparse.Namespace) -> int:
         from planner.vpip.plot import plot_schedule
 
         plot_schedule(result, args.plot, plan)
-    emit_json({"out": str(args.out), "plot": args.plot, "driver": result["driver"], **result["summary"]}, None)
+    emit_json(
+        {"out": str(args.out), "plot": args.plot, "driver": result["driver"], **result["summary"]}, None
+    )
     return 0
 
 
@@ -82,8 +87,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         p.add_argument("--robot", default=robot_default, help="profile name or TOML path (default: daedalus)")
 
     rods = sub.add_parser("rods", help="eq. 18 length of every rod for one plane, roll and pitch phase")
-    rods.add_argument("--phi-vpip", type=finite_float, required=True, help="plane roll, > 0 lowers the left side")
-    rods.add_argument("--theta-vpip", type=finite_float, required=True, help="plane pitch, > 0 drives forward")
+    rods.add_argument(
+        "--phi-vpip", type=finite_float, required=True, help="plane roll, > 0 lowers the left side"
+    )
+    rods.add_argument(
+        "--theta-vpip", type=finite_float, required=True, help="plane pitch, > 0 drives forward"
+    )
     rods.add_argument("--roll", type=finite_float, default=0.0, help="robot roll, > 0 leans left (default 0)")
     rods.add_argument("--pitch-phase", type=finite_float, default=0.0, help="how far the sphere has rolled")
     rods.add_argument("--degrees", action="store_true", help="input angles in degrees (output stays radians)")
@@ -109,10 +118,14 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     cal.set_defaults(func=_calibrate)
 
     sched = sub.add_parser("schedule", help="100 Hz VPIP angles and rod lengths along a planned path")
-    sched.add_argument("--path", required=True, help="planner result JSON (states x, y, yaw, roll, v, t, s, curvature)")
+    sched.add_argument(
+        "--path", required=True, help="planner result JSON (states x, y, yaw, roll, v, t, s, curvature)"
+    )
     sched.add_argument("--out", required=True, help="write the time series JSON here")
     sched.add_argument("--plot", help="write a PNG: rod-length heat map, roll and plane angles, path")
-    sched.add_argument("--driver", choices=("vpip", "simple"), default="vpip", help="rod driver (default vpip)")
+    sched.add_argument(
+        "--driver", choices=("vpip", "simple"), default="vpip", help="rod driver (default vpip)"
+    )
     common(sched, None)
     sched.set_defaults(func=_schedule)
     parser.set_defaults(func=lambda args: args.func(args))
