@@ -158,29 +158,30 @@ def calibrate_report(runs_csv_text: str, robot: str | RobotProfile = "daedalus")
     """
     profile = robot if isinstance(robot, RobotProfile) else load_robot(robot)
     rolls, radii = parse_runs_csv(runs_csv_text)
-    groups: dict[float, list[float]] = {}
+    groups: dict[float, list[float]] = {}  # keyed by roll in degrees (rounded to 1e-6 deg)
     for r, rad in zip(rolls, radii, strict=True):
-        groups.setdefault(round(r, 9), []).append(1.0 / rad)
-    table_roll = sorted(groups)
-    table_radius = [1.0 / float(np.mean(groups[r])) for r in table_roll]
+        groups.setdefault(round(math.degrees(r), 6), []).append(1.0 / rad)
+    table_deg = sorted(groups)
+    table_roll = [math.radians(d) for d in table_deg]
+    table_radius = [1.0 / float(np.mean(groups[d])) for d in table_deg]
     try:
         model = RollModel("calibrated", profile.radius_m, tuple(table_roll), tuple(table_radius))
     except RobotProfileError as exc:
         raise InvalidInput("runs", f"cannot make a roll model from these runs: {exc.msg}") from None
     fit = [
         {
-            "roll_deg": math.degrees(r),
-            "runs": len(groups[r]),
+            "roll_deg": d,
+            "runs": len(groups[d]),
             "diameter_m": 2.0 * rad,
             "kinematic_diameter_m": 2.0 * profile.radius_m / math.tan(r),
         }
-        for r, rad in zip(table_roll, table_radius, strict=True)
+        for d, r, rad in zip(table_deg, table_roll, table_radius, strict=True)
     ]
     return {
         "robot": profile.name,
         "roll_model": {
             "kind": "calibrated",
-            "roll_deg": [math.degrees(r) for r in table_roll],
+            "roll_deg": table_deg,
             "diameter_m": [2.0 * r for r in table_radius],
         },
         "table": fit,
@@ -208,8 +209,8 @@ def profile_toml(profile: RobotProfile, roll_model: Mapping[str, Any]) -> str:
         "name": profile.name,
         "description": profile.description,
         "radius_m": profile.radius_m,
-        "max_roll_deg": math.degrees(profile.max_roll_rad),
-        "max_roll_rate_deg_s": math.degrees(profile.max_roll_rate_rad_s),
+        "max_roll_deg": round(math.degrees(profile.max_roll_rad), 9),
+        "max_roll_rate_deg_s": round(math.degrees(profile.max_roll_rate_rad_s), 9),
         "roll_time_constant_s": profile.roll_time_constant_s,
         "max_speed_m_s": profile.max_speed_m_s,
         "max_accel_m_s2": profile.max_accel_m_s2,

@@ -9,9 +9,11 @@ which reduces to eq. 2 when r_s = r_m. ``α`` is the largest ζ at which the rod
 
 Balancing (§2.2): a two-point controller with a ±3° hysteresis band on the roll error. Outside the
 band the rods extend on the side the robot tilts towards and retract on the opposing side; inside it the
-last state is kept. Our reading of "extend": the tilted side's rods near the bottom (|ζ| ≤ α) are
-commanded to their ground-contact length (propping the shell up) while its pushing rods keep pushing;
-"retract": every rod of the other side goes to 0. Before the first switch both sides only push.
+last state is kept. Our reading of "extend": the tilted side's rods from straight down to the end of
+the push window (0 ≤ ζ ≤ α) are commanded to their ground-contact length (so its pushing rods keep
+pushing and the rod under the disc props the shell); "retract": every rod of the other side goes to 0.
+(Propping up the front rods as well, ζ in (−α, 0), was tried: in the surrogate it reads as a backward
+pitch and the baseline stalls on curves.) Before the first switch both sides only push.
 The band is centred on the desired roll (the paper's algorithm only balances upright; centring it
 on the desired roll lets the baseline attempt the same path).
 """
@@ -22,7 +24,7 @@ import math
 
 import numpy as np
 
-from planner.vpip.rods import TWO_PI, RodCommand, RodParams, rate_limit, rod_lengths
+from planner.vpip.rods import RodCommand, RodParams, rate_limit, rod_lengths
 
 
 class SimpleDriver:
@@ -65,7 +67,7 @@ class SimpleDriver:
         zeta = ground.zeta_rad
         contact = ground.length_m
         pushing = (zeta > self.beta_rad) & (zeta <= self.alpha_rad)
-        bottom = (zeta <= self.alpha_rad) | (zeta >= TWO_PI - self.alpha_rad)
+        bottom = zeta <= self.alpha_rad
         length = np.where(pushing, contact, 0.0)
         if self.balance != 0:
             # paper side factor: left = −1; balance +1 means "tilted left": extend left, retract right
