@@ -258,8 +258,10 @@ class SweptDiscChecker:
 
 
 def _load_grid(path: str) -> OccupancyGrid:
-    from planner.mapio import load_map  # written by the map helper; imported only when a map is used
-
+    try:
+        from planner.mapio import load_map  # imported only when a map is used
+    except ImportError:
+        raise InvalidInput("map", "map loading (planner.mapio) is not available in this build") from None
     return load_map(path)
 
 

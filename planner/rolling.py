@@ -97,8 +97,8 @@ def quat_to_matrix(q: Quat) -> np.ndarray:
 
 def quat_angle(a: Quat, b: Quat) -> float:
     """Angle (rad, in [0, π]) of the rotation taking orientation ``a`` to ``b``."""
-    d = abs(sum(ai * bi for ai, bi in zip(a, b, strict=True)))
-    return 2.0 * math.acos(min(1.0, d))
+    rel = quat_mul(quat_conj(a), b)
+    return 2.0 * math.atan2(math.sqrt(rel[1] ** 2 + rel[2] ** 2 + rel[3] ** 2), abs(rel[0]))
 
 
 def quat_mul_array(a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -224,13 +224,10 @@ class GroundSegment:
     def point_at(self, s: np.ndarray | float) -> tuple[np.ndarray, np.ndarray]:
         """Centre position(s) after travelling ``s`` metres along the segment."""
         s = np.asarray(s, dtype=float)
-        h, k = self.heading_rad, self.curvature_1_m
-        if k == 0.0:
-            return self.x0 + s * math.cos(h), self.y0 + s * math.sin(h)
-        return (
-            self.x0 + (np.sin(h + k * s) - math.sin(h)) / k,
-            self.y0 - (np.cos(h + k * s) - math.cos(h)) / k,
-        )
+        half = 0.5 * self.curvature_1_m * s
+        chord = s * np.sinc(half / math.pi)          # 2 sin(κs/2)/κ, stable as κ → 0
+        mid = self.heading_rad + half
+        return self.x0 + chord * np.cos(mid), self.y0 + chord * np.sin(mid)
 
     @property
     def end(self) -> tuple[float, float]:
