@@ -341,7 +341,9 @@ def _segment_json(seg: GroundSegment, step: str, q: Quat, t0: float, R: float, s
     w = speed / R
     omega_world = (-w * math.sin(h), w * math.cos(h), 0.0)
     omega_body = quat_rotate(quat_conj(q), omega_world)
-    _, alpha, _ = tilt_from_quat(q)
+    theta, alpha, _ = tilt_from_quat(q)
+    if theta < 1e-9:
+        alpha = h   # α is undefined with P on top; rolling away tilts P towards the direction of travel
     wxp, wyp = model_controls(h, speed, alpha, R)
     out: dict[str, Any] = {
         "kind": seg.kind,

@@ -39,6 +39,10 @@ HALF_PI = 0.5 * math.pi
 MAX_TAN_THETA = 200.0            # largest circle used: radius 200·R (θ' ≈ 89.7°)
 _THETA_MAX = math.atan(MAX_TAN_THETA)
 _GRID = 256                      # θ' samples per branch when searching
+_INFO_KEYS = (
+    "theta_prime_rad", "alpha_prime_rad", "alpha_final_rad", "delta_alpha_rad", "delta_q_rad", "circle", "turn",
+    "fixed_point_F", "circle_radius_m", "circle_center",
+)
 _BRANCHES = (("direct", 1), ("direct", -1), ("complementary", 1), ("complementary", -1))
 
 
@@ -51,7 +55,7 @@ def theta_for_offset(offset: float) -> float:
     """Solve tan θ − θ = ``offset`` (≥ 0) for θ ∈ [0, π/2) (eq. 15)."""
     if offset <= 0.0:
         return 0.0
-    hi = HALF_PI - 1e-12
+    hi = math.atan(offset + HALF_PI)   # tan(hi) − hi ≥ offset
     return float(brentq(lambda t: math.tan(t) - t - offset, 0.0, hi, xtol=1e-15, rtol=4 * np.finfo(float).eps))
 
 
@@ -107,20 +111,21 @@ def _solution(fx: float, fy: float, theta_p: float, delta_alpha: float, circle: 
 
 
 def solve_partial_alpha(fx: float, fy: float, alpha_f: float) -> list[ArcSolution]:
-    """Direct and complementary circles for a given final direction α_f (eq. 12–16), unit sphere."""
+    """Direct and complementary circles for a given final direction α_f (eq. 12–16), unit sphere.
+
+    Empty when F is at the goal, when α_f points towards F ((F − O)·u_f ≥ 0: C' would have to lie beyond O),
+    or when the circle would be larger than ``MAX_TAN_THETA``·R.
+    """
     ux, uy = math.cos(alpha_f), math.sin(alpha_f)
     dot = fx * ux + fy * uy
     r2 = fx * fx + fy * fy
     if r2 == 0.0:
         return []
     if dot >= 0.0:
-        bad = math.degrees(math.atan2(-fy, -fx))
-        raise InvalidInput(
-            "alpha_final",
-            f"the final roll must point away from F, i.e. within 90° of {bad:.1f}° (F is the point where P "
-            "comes on top before the circle)",
-        )
+        return []   # the last roll would have to point towards F: no circle with θ' < π/2
     rho = r2 / (-2.0 * dot)
+    if rho > offset_of(_THETA_MAX):
+        return []   # α_f nearly perpendicular to F − O: the circle would exceed MAX_TAN_THETA·R
     theta_p = theta_for_offset(rho)
     cx, cy = -rho * ux, -rho * uy
     alpha_p = math.atan2(fy - cy, fx - cx)
@@ -260,7 +265,8 @@ def arc_candidates(
         ux, uy = (fx - gx) / R, (fy - gy) / R
         psteps = ("step 1: P to the top",) * len(psegs)
         if math.hypot(ux, uy) < 1e-12 and goal_heading is None:
-            out.append(Manoeuvre("arc", f"{pname}; F is the goal", tuple(psegs), psteps, {}))
+            none = dict.fromkeys(_INFO_KEYS)
+            out.append(Manoeuvre("arc", f"{pname}; F is the goal, no circle needed", tuple(psegs), psteps, none))
             continue
         if goal_heading is not None:
             need = wrap_angle(goal_heading - tilt_from_quat(q)[2])
@@ -286,5 +292,12 @@ def arc_candidates(
             }
             steps = (*psteps, "step 2: roll along alpha'", "step 3: circle", "step 4: P to the top")
             out.append(Manoeuvre("arc", f"{pname}; {sol.circle} circle, {turn}", tuple(psegs) + tuple(segs), steps, info))
+    if not out and alpha_final is not None:
+        bad = math.degrees(math.atan2(gy - fy0, gx - fx0))
+        raise InvalidInput(
+            "alpha_final",
+            f"no circle ends rolling along {math.degrees(alpha_final):.1f}°: the last roll must point away from "
+            f"F (where P first comes on top), i.e. within 90° of {bad:.1f}°",
+        )
     out.sort(key=lambda m: m.length_m)
     return out

@@ -170,13 +170,13 @@ def solve_triangles(dx: float, dy: float, yaw: float | None) -> list[tuple[str, 
                 if h1 == h2:
                     e1 = np.append(e1, h1 * total / 2.0)   # the symmetric pair, exact for d = 0
                 e2 = h2 * (total - h1 * e1)
-                ok = (e1 > 0) & (e1 < math.pi) & (e2 > 1e-9) & (e2 < math.pi - 1e-9)
+                ok = (e1 > 0) & (e1 < math.pi) & (e2 > 0) & (e2 < math.pi)
                 if not ok.any():
                     continue
                 e1, e2 = e1[ok], e2[ok]
                 d1, _, l1, _ = _family_arrays(e1)
                 d2, _, l2, _ = _family_arrays(e2)
-                feasible = (np.abs(d1 - d2) <= d + 1e-12) & (d <= d1 + d2)
+                feasible = (np.abs(d1 - d2) <= d + 1e-10) & (d <= d1 + d2 + 1e-10)
                 if not feasible.any():
                     continue
                 idx = np.flatnonzero(feasible)
