@@ -47,8 +47,8 @@ from planner.rolling import (
 )
 
 METHODS = ("arc", "triangle")
-SAMPLE_SPACING = 0.02            # samples at most this many radii of rolling apart
-POSITION_TOL = 1e-3              # goal position tolerance, in radii
+SAMPLE_SPACING = 0.02  # samples at most this many radii of rolling apart
+POSITION_TOL = 1e-3  # goal position tolerance, in radii
 ANGLE_TOL_RAD = math.radians(0.1)
 ROBOT = "spherobot"
 SAMPLE_FIELDS = ("t", "x", "y", "qw", "qx", "qy", "qz")
@@ -148,8 +148,17 @@ class ReconfigureRequest:
             if not (math.isfinite(v) and v > 0):
                 raise InvalidInput(name, f"must be a finite number > 0, got {v!r}")
         return ReconfigureRequest(
-            self.method, self.start, self.goal, self.start_tilt, self.start_spin, self.goal_heading,
-            self.alpha_final, radius, rate, self.map, self.allow_unknown,
+            self.method,
+            self.start,
+            self.goal,
+            self.start_tilt,
+            self.start_spin,
+            self.goal_heading,
+            self.alpha_final,
+            radius,
+            rate,
+            self.map,
+            self.allow_unknown,
         )
 
     @property
@@ -194,7 +203,9 @@ class RolledManoeuvre:
         return tuple(float(v) for v in self.quat[-1])  # type: ignore[return-value]
 
 
-def roll_manoeuvre(m: Manoeuvre, start: tuple[float, float], q0: Quat, radius_m: float, speed_m_s: float) -> RolledManoeuvre:
+def roll_manoeuvre(
+    m: Manoeuvre, start: tuple[float, float], q0: Quat, radius_m: float, speed_m_s: float
+) -> RolledManoeuvre:
     """Roll ``m`` exactly and sample it at most ``SAMPLE_SPACING·R`` of rolling apart."""
     ts: list[np.ndarray] = [np.zeros(1)]
     xys: list[np.ndarray] = [np.array([start], dtype=float)]
@@ -217,7 +228,9 @@ def roll_manoeuvre(m: Manoeuvre, start: tuple[float, float], q0: Quat, radius_m:
         qs.append(quats)
         q = tuple(float(v) for v in quats[-1])  # type: ignore[assignment]
         t += seg.length_m / speed_m_s
-    return RolledManoeuvre(m, np.concatenate(ts), np.concatenate(xys), np.concatenate(qs), tuple(seg_q), tuple(seg_t0))
+    return RolledManoeuvre(
+        m, np.concatenate(ts), np.concatenate(xys), np.concatenate(qs), tuple(seg_q), tuple(seg_t0)
+    )
 
 
 def goal_errors(
@@ -244,10 +257,12 @@ class SweptDiscChecker:
 
         self.grid = grid
         blocked = np.pad(grid.blocked(allow_unknown), 1, constant_values=True)
-        self.clearance_m = distance_transform_edt(~blocked) * grid.resolution_m - math.sqrt(2) * grid.resolution_m
+        self.clearance_m = (
+            distance_transform_edt(~blocked) * grid.resolution_m - math.sqrt(2) * grid.resolution_m
+        )
 
     def clearance(self, xy: np.ndarray) -> np.ndarray:
-        """Lower bound (m) on the distance from each point (N, 2) to the nearest blocked cell (−inf outside)."""
+        """Lower bound (m) on each point's (N, 2) distance to the nearest blocked cell (−inf outside)."""
         g = self.grid
         ix = np.floor((xy[:, 0] - g.origin[0]) / g.resolution_m).astype(int) + 1
         iy = np.floor((xy[:, 1] - g.origin[1]) / g.resolution_m).astype(int) + 1
@@ -303,7 +318,9 @@ def plan_reconfiguration(
             if not grid.contains(*pt):
                 raise outside(f"{name} ({pt[0]:.3f}, {pt[1]:.3f}) is outside map {grid.name!r}")
             if checker.clearance(np.array([pt]))[0] < R:
-                raise occupied(f"the sphere (radius {R} m) at the {name} overlaps an obstacle of map {grid.name!r}")
+                raise occupied(
+                    f"the sphere (radius {R} m) at the {name} overlaps an obstacle of map {grid.name!r}"
+                )
 
     cands = candidates(req)
     q0 = req.start_quat
@@ -312,8 +329,12 @@ def plan_reconfiguration(
     for m in cands:
         rolled = roll_manoeuvre(m, req.start, q0, R, speed)
         pos_err, p_err, head_err = goal_errors(rolled.xy[-1], rolled.final_quat, req.goal, req.goal_heading)
-        if pos_err > POSITION_TOL * R or p_err > ANGLE_TOL_RAD or (head_err is not None and head_err > ANGLE_TOL_RAD):
-            continue   # a candidate the simulator rejects is never returned
+        if (
+            pos_err > POSITION_TOL * R
+            or p_err > ANGLE_TOL_RAD
+            or (head_err is not None and head_err > ANGLE_TOL_RAD)
+        ):
+            continue  # a candidate the simulator rejects is never returned
         tried += 1
         clearance = None
         if checker is not None:
@@ -333,17 +354,21 @@ def plan_reconfiguration(
         return _result(req, rolled, time.perf_counter() - t_start, grid, tried, clearance)
     if first_hit is None:
         raise NoValidPathFound(f"the {req.method} planner found no manoeuvre for this problem")
-    raise NoValidPathFound(f"all {tried} alternatives of the {req.method} method collide with the map; {first_hit}")
+    raise NoValidPathFound(
+        f"all {tried} alternatives of the {req.method} method collide with the map; {first_hit}"
+    )
 
 
-def _segment_json(seg: GroundSegment, step: str, q: Quat, t0: float, R: float, speed: float) -> dict[str, Any]:
+def _segment_json(
+    seg: GroundSegment, step: str, q: Quat, t0: float, R: float, speed: float
+) -> dict[str, Any]:
     h = seg.heading_rad
     w = speed / R
     omega_world = (-w * math.sin(h), w * math.cos(h), 0.0)
     omega_body = quat_rotate(quat_conj(q), omega_world)
     theta, alpha, _ = tilt_from_quat(q)
     if theta < 1e-9:
-        alpha = h   # α is undefined with P on top; rolling away tilts P towards the direction of travel
+        alpha = h  # α is undefined with P on top; rolling away tilts P towards the direction of travel
     wxp, wyp = model_controls(h, speed, alpha, R)
     out: dict[str, Any] = {
         "kind": seg.kind,
@@ -399,25 +424,46 @@ def _result(
         "roll_rate_rad_s": req.roll_rate_rad_s,
         "speed_m_s": speed,
         "start": {
-            "x": req.start[0], "y": req.start[1],
-            "theta_rad": req.start_tilt[0], "alpha_rad": req.start_tilt[1], "spin_rad": req.start_spin,
-            "qw": q0[0], "qx": q0[1], "qy": q0[2], "qz": q0[3],
+            "x": req.start[0],
+            "y": req.start[1],
+            "theta_rad": req.start_tilt[0],
+            "alpha_rad": req.start_tilt[1],
+            "spin_rad": req.start_spin,
+            "qw": q0[0],
+            "qx": q0[1],
+            "qy": q0[2],
+            "qz": q0[3],
         },
-        "goal": {"x": req.goal[0], "y": req.goal[1], "heading_rad": req.goal_heading, "alpha_final_rad": req.alpha_final},
+        "goal": {
+            "x": req.goal[0],
+            "y": req.goal[1],
+            "heading_rad": req.goal_heading,
+            "alpha_final_rad": req.alpha_final,
+        },
         "length_m": m.length_m,
         "path_length_m": m.length_m,
         "duration_s": m.length_m / speed,
         "planning_time_s": planning_time_s,
         "segments": [
             _segment_json(seg, step, q, t0, R, speed)
-            for seg, step, q, t0 in zip(m.segments, m.steps, rolled.segment_quat, rolled.segment_t0, strict=True)
+            for seg, step, q, t0 in zip(
+                m.segments, m.steps, rolled.segment_quat, rolled.segment_t0, strict=True
+            )
         ],
         "samples": samples,
         "final": {
-            "x": float(rolled.xy[-1, 0]), "y": float(rolled.xy[-1, 1]),
-            "qw": qf[0], "qx": qf[1], "qy": qf[2], "qz": qf[3],
-            "theta_rad": theta_f, "alpha_rad": alpha_f, "heading_rad": heading_f,
-            "position_error_m": pos_err, "p_from_top_rad": p_err, "heading_error_rad": head_err,
+            "x": float(rolled.xy[-1, 0]),
+            "y": float(rolled.xy[-1, 1]),
+            "qw": qf[0],
+            "qx": qf[1],
+            "qy": qf[2],
+            "qz": qf[3],
+            "theta_rad": theta_f,
+            "alpha_rad": alpha_f,
+            "heading_rad": heading_f,
+            "position_error_m": pos_err,
+            "p_from_top_rad": p_err,
+            "heading_error_rad": head_err,
         },
     }
     result.update(m.info)
@@ -482,7 +528,10 @@ def benchmark(n: int = 200, seed: int = 0) -> list[dict[str, Any]]:
 
 def format_benchmark(rows: Sequence[Mapping[str, Any]]) -> str:
     """The benchmark rows as a fixed-width table."""
-    head = f"{'method':<9}{'mode':<10}{'n':>5}{'plan med ms':>13}{'p95 ms':>9}{'max ms':>9}{'geom med ms':>13}{'len/R med':>11}"
+    head = (
+        f"{'method':<9}{'mode':<10}{'n':>5}{'plan med ms':>13}{'p95 ms':>9}{'max ms':>9}"
+        f"{'geom med ms':>13}{'len/R med':>11}"
+    )
     lines = [head, "-" * len(head)]
     for r in rows:
         lines.append(
@@ -493,7 +542,9 @@ def format_benchmark(rows: Sequence[Mapping[str, Any]]) -> str:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m planner.reconfigure", description="Reconfiguration plan-time benchmark.")
+    parser = argparse.ArgumentParser(
+        prog="python -m planner.reconfigure", description="Reconfiguration plan-time benchmark."
+    )
     parser.add_argument("-n", type=int, default=200, help="problems per method and mode (default 200)")
     parser.add_argument("--seed", type=int, default=0)
     args = parser.parse_args(argv)

@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from scipy.optimize import brentq
@@ -36,12 +37,20 @@ from planner.rolling import GroundSegment, Quat, roll_segment, tilt_from_quat, w
 
 TWO_PI = 2.0 * math.pi
 HALF_PI = 0.5 * math.pi
-MAX_TAN_THETA = 200.0            # largest circle used: radius 200·R (θ' ≈ 89.7°)
+MAX_TAN_THETA = 200.0  # largest circle used: radius 200·R (θ' ≈ 89.7°)
 _THETA_MAX = math.atan(MAX_TAN_THETA)
-_GRID = 256                      # θ' samples per branch when searching
+_GRID = 256  # θ' samples per branch when searching
 _INFO_KEYS = (
-    "theta_prime_rad", "alpha_prime_rad", "alpha_final_rad", "delta_alpha_rad", "delta_q_rad", "circle", "turn",
-    "fixed_point_F", "circle_radius_m", "circle_center",
+    "theta_prime_rad",
+    "alpha_prime_rad",
+    "alpha_final_rad",
+    "delta_alpha_rad",
+    "delta_q_rad",
+    "circle",
+    "turn",
+    "fixed_point_F",
+    "circle_radius_m",
+    "circle_center",
 )
 _BRANCHES = (("direct", 1), ("direct", -1), ("complementary", 1), ("complementary", -1))
 
@@ -55,11 +64,15 @@ def theta_for_offset(offset: float) -> float:
     """Solve tan θ − θ = ``offset`` (≥ 0) for θ ∈ [0, π/2) (eq. 15)."""
     if offset <= 0.0:
         return 0.0
-    hi = math.atan(offset + HALF_PI)   # tan(hi) − hi ≥ offset
-    return float(brentq(lambda t: math.tan(t) - t - offset, 0.0, hi, xtol=1e-15, rtol=4 * np.finfo(float).eps))
+    hi = math.atan(offset + HALF_PI)  # tan(hi) − hi ≥ offset
+    return float(
+        brentq(lambda t: math.tan(t) - t - offset, 0.0, hi, xtol=1e-15, rtol=4 * np.finfo(float).eps)
+    )
 
 
-def paper_circle_center(x0: float, y0: float, theta0: float, alpha0: float, alpha_f: float) -> tuple[float, float]:
+def paper_circle_center(
+    x0: float, y0: float, theta0: float, alpha0: float, alpha_f: float
+) -> tuple[float, float]:
     """C' = (a, b) by eq. 12 and 14 (unit sphere, goal at the origin). Singular where tan α_f is."""
     ta = math.tan(alpha_f)
     num = x0 * x0 + y0 * y0 + theta0 * theta0 - 2 * theta0 * (x0 * math.cos(alpha0) + y0 * math.sin(alpha0))
@@ -122,16 +135,19 @@ def solve_partial_alpha(fx: float, fy: float, alpha_f: float) -> list[ArcSolutio
     if r2 == 0.0:
         return []
     if dot >= 0.0:
-        return []   # the last roll would have to point towards F: no circle with θ' < π/2
+        return []  # the last roll would have to point towards F: no circle with θ' < π/2
     rho = r2 / (-2.0 * dot)
     if rho > offset_of(_THETA_MAX):
-        return []   # α_f nearly perpendicular to F − O: the circle would exceed MAX_TAN_THETA·R
+        return []  # α_f nearly perpendicular to F − O: the circle would exceed MAX_TAN_THETA·R
     theta_p = theta_for_offset(rho)
     cx, cy = -rho * ux, -rho * uy
     alpha_p = math.atan2(fy - cy, fx - cx)
     direct = wrap_angle(alpha_f - alpha_p)
     comp = direct - math.copysign(TWO_PI, direct)
-    return [ArcSolution(theta_p, alpha_p, direct, "direct"), ArcSolution(theta_p, alpha_p, comp, "complementary")]
+    return [
+        ArcSolution(theta_p, alpha_p, direct, "direct"),
+        ArcSolution(theta_p, alpha_p, comp, "complementary"),
+    ]
 
 
 def _branch_grid(r: float) -> tuple[np.ndarray, np.ndarray]:
@@ -144,7 +160,8 @@ def _branch_grid(r: float) -> tuple[np.ndarray, np.ndarray]:
     return theta, half
 
 
-def _delta_alpha(half: np.ndarray | float, circle: str, sign: int) -> np.ndarray | float:
+def _delta_alpha(half: Any, circle: str, sign: int) -> Any:
+    """Signed Δα of a branch from the half chord angle (array or float); eq. 22 direct, eq. 23 complement."""
     return sign * (2.0 * half if circle == "direct" else TWO_PI - 2.0 * half)
 
 
@@ -159,7 +176,7 @@ def solve_partial_free(fx: float, fy: float, per_branch: int = 4) -> list[ArcSol
         da = _delta_alpha(half, circle, sign)
         length = 2 * theta + np.tan(theta) * np.abs(da)
         order = np.argsort(length)
-        picks = [int(order[0])] + [int(i) for i in order[1 :: max(1, _GRID // per_branch)]][: per_branch - 1]
+        picks = [int(order[0]), *(int(i) for i in order[1 :: max(1, _GRID // per_branch)][: per_branch - 1])]
         for i in picks:
             out.append(_solution(fx, fy, float(theta[i]), float(da[i]), circle))
     return out
@@ -209,14 +226,16 @@ def solve_complete(fx: float, fy: float, delta_q: float, max_solutions: int = 8)
 
 
 def arc_segments(sol: ArcSolution, fx: float, fy: float, radius_m: float) -> list[GroundSegment]:
-    """Steps 2–4 as ground segments (m), for F = (fx, fy) m (world frame, so the goal is at the origin + F)."""
+    """Steps 2–4 as ground segments (m) starting at the fixed point F = (fx, fy) m, world frame."""
     R = radius_m
     tp, ap = sol.theta_prime, sol.alpha_prime
     step2 = GroundSegment(fx, fy, ap, R * tp, 0.0, "a")
     qx, qy = step2.end
     rho = R * math.tan(tp)
     sign = 1.0 if sol.delta_alpha > 0 else -1.0
-    step3 = GroundSegment(qx, qy, wrap_angle(ap + sign * HALF_PI), rho * abs(sol.delta_alpha), sign / rho, "b")
+    step3 = GroundSegment(
+        qx, qy, wrap_angle(ap + sign * HALF_PI), rho * abs(sol.delta_alpha), sign / rho, "b"
+    )
     ex, ey = step3.end
     step4 = GroundSegment(ex, ey, wrap_angle(sol.alpha_final + math.pi), R * tp, 0.0, "a")
     return [step2, step3, step4]
@@ -241,7 +260,9 @@ def arc_candidates(
     theta0, alpha0, _ = tilt_from_quat(q0)
     preludes: list[tuple[str, list[GroundSegment]]] = []
     if theta0 > 0.0:
-        preludes.append(("step 1 backwards", [GroundSegment(sx, sy, wrap_angle(alpha0 + math.pi), R * theta0, 0.0, "a")]))
+        preludes.append(
+            ("step 1 backwards", [GroundSegment(sx, sy, wrap_angle(alpha0 + math.pi), R * theta0, 0.0, "a")])
+        )
         preludes.append(("step 1 forwards", [GroundSegment(sx, sy, alpha0, R * (TWO_PI - theta0), 0.0, "a")]))
     else:
         preludes.append(("P already on top", []))
@@ -252,7 +273,12 @@ def arc_candidates(
         extra = R * (theta0 + TWO_PI)
         if theta0 > 0.0:
             dist_dir = wrap_angle(alpha0 + math.pi)
-            preludes.append(("step 1 backwards with one extra revolution", [GroundSegment(sx, sy, dist_dir, extra, 0.0, "a")]))
+            preludes.append(
+                (
+                    "step 1 backwards with one extra revolution",
+                    [GroundSegment(sx, sy, dist_dir, extra, 0.0, "a")],
+                )
+            )
         else:
             preludes.append(("one full revolution first", [GroundSegment(sx, sy, away, extra, 0.0, "a")]))
 
@@ -266,7 +292,9 @@ def arc_candidates(
         psteps = ("step 1: P to the top",) * len(psegs)
         if math.hypot(ux, uy) < 1e-12 and goal_heading is None:
             none = dict.fromkeys(_INFO_KEYS)
-            out.append(Manoeuvre("arc", f"{pname}; F is the goal, no circle needed", tuple(psegs), psteps, none))
+            out.append(
+                Manoeuvre("arc", f"{pname}; F is the goal, no circle needed", tuple(psegs), psteps, none)
+            )
             continue
         if goal_heading is not None:
             need = wrap_angle(goal_heading - tilt_from_quat(q)[2])
@@ -291,12 +319,17 @@ def arc_candidates(
                 "circle_center": list(segs[1].center or (math.nan, math.nan)),
             }
             steps = (*psteps, "step 2: roll along alpha'", "step 3: circle", "step 4: P to the top")
-            out.append(Manoeuvre("arc", f"{pname}; {sol.circle} circle, {turn}", tuple(psegs) + tuple(segs), steps, info))
+            out.append(
+                Manoeuvre(
+                    "arc", f"{pname}; {sol.circle} circle, {turn}", tuple(psegs) + tuple(segs), steps, info
+                )
+            )
     if not out and alpha_final is not None:
         bad = math.degrees(math.atan2(gy - fy0, gx - fx0))
         raise InvalidInput(
             "alpha_final",
-            f"no circle ends rolling along {math.degrees(alpha_final):.1f}°: the last roll must point away from "
+            f"no circle ends rolling along {math.degrees(alpha_final):.1f}°: the last roll must point away "
+            "from "
             f"F (where P first comes on top), i.e. within 90° of {bad:.1f}°",
         )
     out.sort(key=lambda m: m.length_m)

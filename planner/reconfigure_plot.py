@@ -46,7 +46,11 @@ def plot_reconfiguration(result: dict[str, Any], path: str | Path, grid: Occupan
         res = grid.resolution_m
         ox, oy = grid.origin[0], grid.origin[1]
         ax.imshow(
-            grid.blocked(), origin="lower", cmap="Greys", vmin=0, vmax=1.5,
+            grid.blocked(),
+            origin="lower",
+            cmap="Greys",
+            vmin=0,
+            vmax=1.5,
             extent=(ox, ox + grid.width * res, oy, oy + grid.height * res),
         )
     seen: set[str] = set()
@@ -63,8 +67,10 @@ def plot_reconfiguration(result: dict[str, Any], path: str | Path, grid: Occupan
     ax.plot(goal["x"], goal["y"], "*", ms=12, color="tab:purple", label="goal")
     heading = result["final"]["heading_rad"]
     ax.annotate(
-        "", xy=(goal["x"] + 1.5 * R * math.cos(heading), goal["y"] + 1.5 * R * math.sin(heading)),
-        xytext=(goal["x"], goal["y"]), arrowprops={"arrowstyle": "->", "color": "tab:purple"},
+        "",
+        xy=(goal["x"] + 1.5 * R * math.cos(heading), goal["y"] + 1.5 * R * math.sin(heading)),
+        xytext=(goal["x"], goal["y"]),
+        arrowprops={"arrowstyle": "->", "color": "tab:purple"},
     )
     if "fixed_point_F" in result:
         fx, fy = result["fixed_point_F"]

@@ -33,7 +33,7 @@ from planner.rolling import GroundSegment, Quat, roll_segment, tilt_from_quat, w
 
 TWO_PI = 2.0 * math.pi
 HALF_PI = 0.5 * math.pi
-_E1_GRID = np.linspace(0.0, math.pi, 182)[1:-1]   # excesses of the first triangle searched over
+_E1_GRID = np.linspace(0.0, math.pi, 182)[1:-1]  # excesses of the first triangle searched over
 
 
 @dataclass(frozen=True)
@@ -114,7 +114,7 @@ def _family_distance(excess: float) -> float:
     return float(d[0])
 
 
-MAX_FAMILY_DISTANCE = _family_distance(math.pi - 1e-9)   # ≈ 4.37 (unit sphere)
+MAX_FAMILY_DISTANCE = _family_distance(math.pi - 1e-9)  # ≈ 4.37 (unit sphere)
 
 
 @dataclass(frozen=True)
@@ -168,7 +168,7 @@ def solve_triangles(dx: float, dy: float, yaw: float | None) -> list[tuple[str, 
                 total = target + TWO_PI * k
                 e1 = _E1_GRID
                 if h1 == h2:
-                    e1 = np.append(e1, h1 * total / 2.0)   # the symmetric pair, exact for d = 0
+                    e1 = np.append(e1, h1 * total / 2.0)  # the symmetric pair, exact for d = 0
                 e2 = h2 * (total - h1 * e1)
                 ok = (e1 > 0) & (e1 < math.pi) & (e2 > 0) & (e2 < math.pi)
                 if not ok.any():
@@ -273,8 +273,12 @@ def triangle_candidates(
             info = {
                 "triangles": [
                     {
-                        "a_rad": leg.triangle.a, "b_rad": leg.triangle.b, "c_rad": leg.triangle.c,
-                        "A_rad": leg.triangle.A, "B_rad": leg.triangle.B, "C_rad": leg.triangle.C,
+                        "a_rad": leg.triangle.a,
+                        "b_rad": leg.triangle.b,
+                        "c_rad": leg.triangle.c,
+                        "A_rad": leg.triangle.A,
+                        "B_rad": leg.triangle.B,
+                        "C_rad": leg.triangle.C,
                         "excess_rad": leg.triangle.excess,
                         "hand": "right" if leg.hand == 1 else "left",
                         "yaw_rad": leg.triangle.yaw(leg.hand),
@@ -284,7 +288,9 @@ def triangle_candidates(
                 ],
             }
             out.append(
-                Manoeuvre("triangle", f"{pname}; {tname}", tuple(psegs) + tuple(tsegs), tuple(steps_all), info)
+                Manoeuvre(
+                    "triangle", f"{pname}; {tname}", tuple(psegs) + tuple(tsegs), tuple(steps_all), info
+                )
             )
     out.sort(key=lambda m: m.length_m)
     return out

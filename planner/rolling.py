@@ -188,8 +188,10 @@ def spherobot_rates(
     )
 
 
-def model_controls(heading_rad: float, speed_m_s: float, alpha_rad: float, radius_m: float) -> tuple[float, float]:
-    """(ω'x, ω'y) in rad/s that move the centre at ``speed_m_s`` along ``heading_rad`` (inverse of eq. 1–2)."""
+def model_controls(
+    heading_rad: float, speed_m_s: float, alpha_rad: float, radius_m: float
+) -> tuple[float, float]:
+    """(ω'x, ω'y) in rad/s moving the centre at ``speed_m_s`` along ``heading_rad`` (eq. 1–2 inverted)."""
     k = speed_m_s / radius_m
     return k * math.sin(alpha_rad - heading_rad), k * math.cos(heading_rad - alpha_rad)
 
@@ -225,7 +227,7 @@ class GroundSegment:
         """Centre position(s) after travelling ``s`` metres along the segment."""
         s = np.asarray(s, dtype=float)
         half = 0.5 * self.curvature_1_m * s
-        chord = s * np.sinc(half / math.pi)          # 2 sin(κs/2)/κ, stable as κ → 0
+        chord = s * np.sinc(half / math.pi)  # 2 sin(κs/2)/κ, stable as κ → 0
         mid = self.heading_rad + half
         return self.x0 + chord * np.cos(mid), self.y0 + chord * np.sin(mid)
 
@@ -245,7 +247,8 @@ class GroundSegment:
 
 def roll_segment(q0: Quat, seg: GroundSegment, radius_m: float) -> Quat:
     """Orientation after rolling ``seg`` from orientation ``q0`` (closed form, exact)."""
-    return tuple(sample_segment(q0, seg, radius_m, np.array([seg.length_m]))[0])  # type: ignore[return-value]
+    w, x, y, z = sample_segment(q0, seg, radius_m, np.array([seg.length_m]))[0].tolist()
+    return (w, x, y, z)
 
 
 def sample_segment(q0: Quat, seg: GroundSegment, radius_m: float, s: np.ndarray) -> np.ndarray:

@@ -15,13 +15,15 @@ import numpy as np
 from planner.occupancy import OccupancyGrid
 from planner.rolling import GroundSegment, quat_angle, roll_polyline, tilt_from_quat, wrap_angle
 
-POSITION_TOL = 1e-3          # × R
+POSITION_TOL = 1e-3  # × R
 ANGLE_TOL = math.radians(0.1)
 
 
 def segments_from_json(result: dict[str, Any]) -> list[GroundSegment]:
     return [
-        GroundSegment(s["start"][0], s["start"][1], s["heading_rad"], s["length_m"], s["curvature_1_m"], s["action"])
+        GroundSegment(
+            s["start"][0], s["start"][1], s["heading_rad"], s["length_m"], s["curvature_1_m"], s["action"]
+        )
         for s in result["segments"]
     ]
 

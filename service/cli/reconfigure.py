@@ -1,4 +1,4 @@
-"""``sphereplan reconfigure``: bring a sphere to rest at a goal with P on top (paper 004 Spherobot planners)."""
+"""``sphereplan reconfigure``: bring a sphere to rest at a goal with P on top (paper 004 Spherobot)."""
 
 from __future__ import annotations
 
@@ -16,21 +16,37 @@ HELP = "Plan a Spherobot reconfiguration (position, P on top, optional heading) 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--method", choices=METHODS, default="arc", help="arc (§4, default) or triangle (§3)")
-    parser.add_argument("--radius", type=positive_float, metavar="R", help="sphere radius in m (default: profile)")
+    parser.add_argument(
+        "--radius", type=positive_float, metavar="R", help="sphere radius in m (default: profile)"
+    )
     parser.add_argument("--start", type=finite_float, nargs=2, metavar=("X", "Y"), required=True)
     parser.add_argument(
-        "--start-tilt", type=finite_float, nargs=2, metavar=("THETA", "ALPHA"), default=[0.0, 0.0],
+        "--start-tilt",
+        type=finite_float,
+        nargs=2,
+        metavar=("THETA", "ALPHA"),
+        default=[0.0, 0.0],
         help="P's polar angle from the top and its azimuth (default 0 0)",
     )
-    parser.add_argument("--start-spin", type=finite_float, default=0.0, metavar="PSI", help="spin about P (default 0)")
+    parser.add_argument(
+        "--start-spin", type=finite_float, default=0.0, metavar="PSI", help="spin about P (default 0)"
+    )
     parser.add_argument("--goal", type=finite_float, nargs=2, metavar=("X", "Y"), required=True)
     parser.add_argument(
-        "--goal-heading", type=finite_float, metavar="PSI",
+        "--goal-heading",
+        type=finite_float,
+        metavar="PSI",
         help="azimuth of body +x with P on top; omitted = partial reconfiguration",
     )
-    parser.add_argument("--alpha-final", type=finite_float, metavar="A", help="arc method: direction of the last roll")
-    parser.add_argument("--roll-rate", type=positive_float, metavar="W", help="shell rate in rad/s (default: profile)")
-    parser.add_argument("--degrees", action="store_true", help="input angles are in degrees (output stays radians)")
+    parser.add_argument(
+        "--alpha-final", type=finite_float, metavar="A", help="arc method: direction of the last roll"
+    )
+    parser.add_argument(
+        "--roll-rate", type=positive_float, metavar="W", help="shell rate in rad/s (default: profile)"
+    )
+    parser.add_argument(
+        "--degrees", action="store_true", help="input angles are in degrees (output stays radians)"
+    )
     parser.add_argument("--map", metavar="M.yaml", help="check the swept sphere against this map")
     parser.add_argument("--allow-unknown", action="store_true", help="treat unknown map cells as free")
     parser.add_argument("--plot", metavar="F.png", help="draw the ground path and P's track on the sphere")

@@ -1,4 +1,4 @@
-"""Spherical-triangle planner (paper 004 §3): corrected eq. 5, eq. 6, eq. 9/10 and complete reconfiguration."""
+"""Spherical-triangle planner (paper 004 §3): corrected eq. 5, eq. 6, eq. 9/10, complete reconfiguration."""
 
 from __future__ import annotations
 
@@ -44,24 +44,38 @@ def _roll_triangle(a: float, b: float, C: float, hand: int, R: float = 1.0):
 def test_corrected_displacement_and_excess_against_rolling(a, b, C, hand, R):
     tri, (dx, dy), q = _roll_triangle(a, b, C, hand, R)
     theta, _, yaw = tilt_from_quat(q)
-    assert theta < 1e-9                                   # the contact point came back: P is on top again
+    assert theta < 1e-9  # the contact point came back: P is on top again
     # eq. 9 / 10: yaw = −E (left-handed) or +E (right-handed)
     assert abs(wrap_angle(yaw - hand * tri.excess)) < 1e-9
     # corrected eq. 5 and eq. 6 (printed for the left-handed path; mirrored for right-handed)
-    d2 = (tri.a**2 + tri.b**2 + tri.c**2 - 2 * tri.a * tri.b * math.cos(tri.C)
-          + 2 * tri.a * tri.c * math.cos(tri.A + tri.C) - 2 * tri.b * tri.c * math.cos(tri.A))
+    d2 = (
+        tri.a**2
+        + tri.b**2
+        + tri.c**2
+        - 2 * tri.a * tri.b * math.cos(tri.C)
+        + 2 * tri.a * tri.c * math.cos(tri.A + tri.C)
+        - 2 * tri.b * tri.c * math.cos(tri.A)
+    )
     assert math.isclose(math.hypot(dx, dy), math.sqrt(max(d2, 0.0)), abs_tol=1e-9)
     assert np.allclose(tri.displacement(hand), (dx, dy), atol=1e-9)
-    phi6 = math.atan2(tri.b * math.sin(tri.C) - tri.c * math.sin(tri.A + tri.C),
-                      tri.a - tri.b * math.cos(tri.C) + tri.c * math.cos(tri.A + tri.C))
+    phi6 = math.atan2(
+        tri.b * math.sin(tri.C) - tri.c * math.sin(tri.A + tri.C),
+        tri.a - tri.b * math.cos(tri.C) + tri.c * math.cos(tri.A + tri.C),
+    )
     if math.hypot(dx, dy) > 1e-6:
         assert abs(wrap_angle(math.atan2(dy, dx) - (-hand) * phi6)) < 1e-6
 
 
 def test_printed_eq_5_is_not_the_rolled_displacement():
     tri, (dx, dy), _ = _roll_triangle(0.5, 0.7, 1.0, -1)
-    printed = (tri.a**2 + tri.b**2 + tri.c**2 - 2 * tri.a * tri.c * math.cos(tri.A + tri.C)
-               - 2 * tri.a * tri.b * math.cos(tri.C) - 2 * tri.a * tri.b * math.cos(tri.A))
+    printed = (
+        tri.a**2
+        + tri.b**2
+        + tri.c**2
+        - 2 * tri.a * tri.c * math.cos(tri.A + tri.C)
+        - 2 * tri.a * tri.b * math.cos(tri.C)
+        - 2 * tri.a * tri.b * math.cos(tri.A)
+    )
     assert abs(math.sqrt(printed) - math.hypot(dx, dy)) > 0.1
 
 
@@ -98,8 +112,14 @@ def test_sum_of_the_two_excesses_is_the_yaw():
 
 def _request(complete: bool, R, sx, sy, gx, gy, th, al, spin, head) -> ReconfigureRequest:
     return ReconfigureRequest(
-        method="triangle", start=(sx * R, sy * R), goal=(gx * R, gy * R), start_tilt=(th, al), start_spin=spin,
-        goal_heading=head if complete else None, radius_m=R, roll_rate_rad_s=1.0,
+        method="triangle",
+        start=(sx * R, sy * R),
+        goal=(gx * R, gy * R),
+        start_tilt=(th, al),
+        start_spin=spin,
+        goal_heading=head if complete else None,
+        radius_m=R,
+        roll_rate_rad_s=1.0,
     )
 
 

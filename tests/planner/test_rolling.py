@@ -43,7 +43,9 @@ radius = st.floats(0.05, 5.0)
 def test_tilt_puts_p_where_the_paper_says_and_round_trips(th, al, spin):
     q = quat_from_tilt(th, al, spin)
     p = p_world(q)
-    assert np.allclose(p, (math.sin(th) * math.cos(al), math.sin(th) * math.sin(al), math.cos(th)), atol=1e-12)
+    assert np.allclose(
+        p, (math.sin(th) * math.cos(al), math.sin(th) * math.sin(al), math.cos(th)), atol=1e-12
+    )
     assert np.allclose(quat_rotate(q, (0, 0, 1)), p, atol=1e-12)
     assert np.allclose(quat_to_matrix(q)[:, 2], p, atol=1e-12)
     t2, a2, s2 = tilt_from_quat(q)
@@ -87,9 +89,9 @@ def test_arc_rolls_without_slip_and_without_vertical_spin(th, al, spin, R, h0, k
     seg = GroundSegment(0.0, 0.0, h0, 2.0 * R, kR / R)
     s = np.array([0.7 * R, 0.7 * R + 1e-6 * R])
     qa, qb = (tuple(v) for v in sample_segment(q0, seg, R, s))
-    dq = quat_mul(qb, (qa[0], -qa[1], -qa[2], -qa[3]))   # rotation from a to b, world frame
+    dq = quat_mul(qb, (qa[0], -qa[1], -qa[2], -qa[3]))  # rotation from a to b, world frame
     dq = dq if dq[0] >= 0 else tuple(-c for c in dq)
-    omega = np.array(dq[1:]) * 2.0 / (s[1] - s[0])        # per metre travelled
+    omega = np.array(dq[1:]) * 2.0 / (s[1] - s[0])  # per metre travelled
     assert abs(omega[2]) < 1e-6 / R
     x, y = seg.point_at(s)
     v = np.array([x[1] - x[0], y[1] - y[0], 0.0]) / (s[1] - s[0])
@@ -116,7 +118,9 @@ def test_spherobot_model_eq_1_to_4_matches_so3_rolling(th, al, spin, R, wxp, wyp
         _, a, _ = tilt_from_quat(qq)
         return np.array([wxp * math.cos(a) - wyp * math.sin(a), wxp * math.sin(a) + wyp * math.cos(a), 0.0])
 
-    def turn(qq: tuple[float, float, float, float], w: np.ndarray, h: float) -> tuple[float, float, float, float]:
+    def turn(
+        qq: tuple[float, float, float, float], w: np.ndarray, h: float
+    ) -> tuple[float, float, float, float]:
         wn = float(np.linalg.norm(w))
         return qq if wn == 0 else quat_normalize(quat_mul(quat_axis_angle(tuple(w / wn), wn * h), qq))
 
@@ -155,5 +159,5 @@ def test_action_b_circle_of_radius_R_tan_theta_keeps_theta(th, al, spin, R, leng
 def test_polyline_corner_is_a_pure_turn():
     q = roll_polyline(IDENTITY, np.array([[0, 0], [1, 0], [1, 1], [0, 1], [0, 0]], float), 1.0)
     assert q.shape == (5, 4)
-    assert not np.allclose(q[-1], IDENTITY)   # a square on the ground is not closed on the sphere
+    assert not np.allclose(q[-1], IDENTITY)  # a square on the ground is not closed on the sphere
     assert math.isclose(np.linalg.norm(q[-1]), 1.0)
