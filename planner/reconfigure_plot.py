@@ -17,8 +17,13 @@ import numpy as np
 
 from planner.occupancy import OccupancyGrid
 
-_COLOURS = {"a": "tab:blue", "b": "tab:orange", "roll": "tab:green"}
-_NAMES = {"a": "action (a): straight roll", "b": "action (b): circle R tan θ", "roll": "triangle leg"}
+_COLOURS = {"a": "tab:blue", "b": "tab:orange", "roll": "tab:green", "straight": "tab:gray"}
+_NAMES = {
+    "a": "action (a): roll along P's azimuth",
+    "b": "action (b): circle R tan θ",
+    "roll": "triangle leg",
+    "straight": "straight roll to the goal",
+}
 
 
 def _p_world(q: np.ndarray) -> np.ndarray:
@@ -93,9 +98,9 @@ def plot_reconfiguration(result: dict[str, Any], path: str | Path, grid: Occupan
     u, v = np.meshgrid(np.linspace(0, 2 * np.pi, 37), np.linspace(0, np.pi, 19))
     ax3.plot_wireframe(np.cos(u) * np.sin(v), np.sin(u) * np.sin(v), np.cos(v), color="0.85", lw=0.5)
     p = _p_world(quat)
-    sc = ax3.scatter(p[:, 0], p[:, 1], p[:, 2], c=t, cmap="viridis", s=4)
-    ax3.scatter(*p[0], color="tab:red", s=40, label="P at start")
-    ax3.scatter(*p[-1], color="tab:purple", marker="*", s=80, label="P at the end")
+    sc = ax3.scatter(p[:, 0], p[:, 1], p[:, 2], c=t, cmap="viridis", s=2, depthshade=False)
+    ax3.scatter(*p[0], color="tab:red", edgecolor="k", s=90, depthshade=False, label="P at start")
+    ax3.scatter(*p[-1], color="tab:purple", edgecolor="k", marker="*", s=160, depthshade=False, label="P at the end")
     ax3.set_box_aspect((1, 1, 1))
     ax3.set_xlabel("x")
     ax3.set_ylabel("y")

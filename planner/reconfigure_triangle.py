@@ -240,7 +240,7 @@ def triangle_candidates(
     dist = math.hypot(gx - sx, gy - sy)
     q = q0
     if dist > 0:
-        segs.append(GroundSegment(sx, sy, math.atan2(gy - sy, gx - sx), dist, 0.0, "roll"))
+        segs.append(GroundSegment(sx, sy, math.atan2(gy - sy, gx - sx), dist, 0.0, "straight"))
         steps.append("roll to the goal")
         q = roll_segment(q, segs[-1], R)
     theta_o, alpha_o, _ = tilt_from_quat(q)

@@ -206,7 +206,7 @@ class GroundSegment:
     Starts at (x0, y0) m with heading ``heading_rad``; ``length_m`` ≥ 0 of travel; ``curvature_1_m`` is
     signed (> 0 turns left, radius 1/|κ|). ``action`` labels the paper's control action: ``"a"``
     (straight roll along P's azimuth, §4.1), ``"b"`` (circle of radius R tan θ, §4.1), ``"roll"``
-    (a straight leg of a spherical-triangle path, §3).
+    (a straight leg of a spherical-triangle path, §3), ``"straight"`` (any other straight roll).
     """
 
     x0: float
@@ -214,7 +214,7 @@ class GroundSegment:
     heading_rad: float
     length_m: float
     curvature_1_m: float = 0.0
-    action: str = "roll"
+    action: str = "straight"
 
     @property
     def kind(self) -> str:
