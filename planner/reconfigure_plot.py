@@ -100,7 +100,9 @@ def plot_reconfiguration(result: dict[str, Any], path: str | Path, grid: Occupan
     p = _p_world(quat)
     sc = ax3.scatter(p[:, 0], p[:, 1], p[:, 2], c=t, cmap="viridis", s=2, depthshade=False)
     ax3.scatter(*p[0], color="tab:red", edgecolor="k", s=90, depthshade=False, label="P at start")
-    ax3.scatter(*p[-1], color="tab:purple", edgecolor="k", marker="*", s=160, depthshade=False, label="P at the end")
+    ax3.scatter(
+        *p[-1], color="tab:purple", edgecolor="k", marker="*", s=160, depthshade=False, label="P at the end"
+    )
     ax3.set_box_aspect((1, 1, 1))
     ax3.set_xlabel("x")
     ax3.set_ylabel("y")
