@@ -93,7 +93,7 @@ def _closed_key(p: np.ndarray, w: int, x: float, y: float, yaw: float, rb: int, 
 def try_shot(
     clear: np.ndarray, p: np.ndarray, offx: np.ndarray, offy: np.ndarray,
     x: float, y: float, yaw: float, roll: float, gx: float, gy: float, gyaw: float, groll: float,
-    seg_roll: np.ndarray, seg_curv: np.ndarray, seg_len: np.ndarray,
+    seg_roll: np.ndarray, seg_curv: np.ndarray, seg_len: np.ndarray, max_len: float,
 ) -> int:
     """Analytic expansion from (x, y, yaw, roll) to (gx, gy, gyaw) arriving with roll ``groll``.
 
@@ -134,6 +134,8 @@ def try_shot(
         tx -= ex
         ty -= ey
     if not ok or n == 0:
+        return 0
+    if shot_length(radius, roll, groll, seg_roll, seg_len, n) >= max_len:
         return 0
     cx, cy, cyaw, croll = x, y, yaw, roll
     worst = math.inf
@@ -184,9 +186,13 @@ def shortcut(
         j = n - 1
         found = False
         while j > i + 1:
+            budget = cum[j] - cum[i] - 1e-6
+            if math.hypot(knots[j, 0] - knots[i, 0], knots[j, 1] - knots[i, 1]) >= budget:
+                j -= stride
+                continue
             m = try_shot(clear, p, offx, offy, knots[i, 0], knots[i, 1], knots[i, 2], knots[i, 3],
-                         knots[j, 0], knots[j, 1], knots[j, 2], knots[j, 3], sr, sc, sl)
-            if m > 0 and shot_length(p[P_RADIUS], knots[i, 3], knots[j, 3], sr, sl, m) < cum[j] - cum[i] - 1e-6:
+                         knots[j, 0], knots[j, 1], knots[j, 2], knots[j, 3], sr, sc, sl, budget)
+            if m > 0:
                 out_ij[count, 0] = i
                 out_ij[count, 1] = j
                 out_n[count] = m
@@ -252,7 +258,7 @@ def search_chunk(
         if counters[C_SINCE_SHOT] >= max(1, int(h_here / p[P_SHOT_RATIO])):
             counters[C_SINCE_SHOT] = 0
             n = try_shot(clear, p, offx, offy, x, y, yaw, roll, p[P_GX], p[P_GY], p[P_GYAW], 0.0,
-                         seg_roll, seg_curv, seg_len)
+                         seg_roll, seg_curv, seg_len, math.inf)
             if n > 0:
                 counters[C_RESULT] = k
                 counters[C_SHOT_SEGS] = n

@@ -20,6 +20,7 @@ import math
 import tomllib
 from collections.abc import Mapping
 from dataclasses import dataclass, field
+from functools import cached_property
 from importlib import resources
 from pathlib import Path
 from typing import Any
@@ -61,10 +62,18 @@ class RollModel:
                     "roll_model.table", "radii must be positive and shrink as roll grows (curvature increasing)"
                 )
 
+    @cached_property
     def _pchip(self) -> PchipInterpolator:
+        """|φ| → κ through (0, 0) and the table; built once (the 100 Hz VPIP loop calls it often)."""
         rolls = np.concatenate([[0.0], np.asarray(self.table_roll_rad, float)])
         kappa = np.concatenate([[0.0], 1.0 / np.asarray(self.table_radius_m, float)])
         return PchipInterpolator(rolls, kappa, extrapolate=False)
+
+    @cached_property
+    def _inverse_grid(self) -> tuple[np.ndarray, np.ndarray]:
+        """Dense monotone samples (κ, |φ|) for inverting the table by interpolation."""
+        grid = np.linspace(0.0, self.max_table_roll_rad, 20001)
+        return self._pchip(grid), grid
 
     @property
     def max_table_roll_rad(self) -> float:
@@ -77,7 +86,7 @@ class RollModel:
             out = np.tan(phi) / self.radius_m
         else:
             mag = np.minimum(np.abs(phi), self.max_table_roll_rad)
-            out = np.sign(phi) * self._pchip()(mag)
+            out = np.sign(phi) * self._pchip(mag)
         return float(out) if out.ndim == 0 else out
 
     def roll_for_curvature(self, curvature: float | np.ndarray) -> np.ndarray | float:
@@ -89,8 +98,7 @@ class RollModel:
         if self.kind == "kinematic":
             out = np.arctan(k * self.radius_m)
         else:
-            grid = np.linspace(0.0, self.max_table_roll_rad, 2001)
-            kap = self._pchip()(grid)
+            kap, grid = self._inverse_grid
             mag = np.interp(np.abs(k), kap, grid)
             out = np.sign(k) * mag
         return float(out) if out.ndim == 0 else out

@@ -72,8 +72,8 @@ class PlannerOptions:
     change_penalty: float = 0.1       # per metre of sideways shift caused by a roll change
     reverse_penalty: float = 2.0
     switch_cost_m: float = 1.0
-    cost_penalty: float = 0.5         # proximity weight (Nav2 ``cost_penalty``)
-    proximity_range_m: float = 0.3    # proximity cost fades to 0 this far beyond the inflated obstacles
+    cost_penalty: float = 2.0         # proximity weight (Nav2 ``cost_penalty``, same default)
+    proximity_range_m: float = 1.0    # proximity cost fades to 0 this far beyond the inflated obstacles
     greed: float = 1.0               # eq. 14j; 0 = admissible A* (slow: 7 rolls × 72 bins); smoothing recovers length
     analytic_ratio_m: float = 3.5     # try a Dubins shot every max(1, h / ratio) expansions
     heuristic_downsample: int = 0     # holonomic grid coarsening; 0 = auto (≥ 2, at most ~50k coarse cells)
@@ -83,7 +83,7 @@ class PlannerOptions:
     state_spacing_m: float = 0.04     # spacing of the returned states (≤ 5 cm, DESIGN.md)
     smooth: bool = True               # shortcut the search's path with collision-checked rollable Dubins shots
     smooth_max_tries: int = 24        # candidate shortcut targets tried per path knot
-    smooth_passes: int = 1            # shortcut passes; later passes re-subdivide (≈ +1 % shorter, 2× slower)
+    smooth_passes: int = 3            # shortcut passes; later passes re-subdivide the path (≈ 2 % shorter)
 
     def validate(self) -> None:
         """Raise :class:`InvalidInput` naming the first bad option."""
