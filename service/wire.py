@@ -1,0 +1,192 @@
+"""Wire models: the JSON requests the HTTP API and the Zenoh node accept, as strict Pydantic models.
+
+They are kept apart from the planner's own types (``planner/`` never imports pydantic). Every request
+model forbids unknown fields, rejects wrong types (no "1" for 1, no true for 1) and NaN/±inf, and
+bounds sizes, so a bad request is rejected before it reaches a worker process. Poses are in the
+``map`` frame (metres, radians, yaw counter-clockwise). Response bodies are the plan result JSON of
+DESIGN.md; their models here only document them in the OpenAPI schema (extra keys allowed).
+
+Map and robot names are plain names (letters, digits, ``_``, ``-``, ``.``; no ``/``, no leading dot):
+they are looked up in the maps folder listing and the built-in profiles, never joined onto a path.
+"""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Sequence
+from typing import Annotated, Any
+
+from pydantic import BaseModel, ConfigDict, Field, model_validator
+
+#: largest inline grid accepted by ``POST /v1/plan`` (cells); also capped by the HTTP body limit
+MAX_INLINE_CELLS = 250_000
+#: largest time limit a request may ask for (s); a server may set a lower one
+MAX_TIME_LIMIT_S = 60.0
+
+NAME_PATTERN = r"^[A-Za-z0-9_-][A-Za-z0-9_.-]{0,63}$"
+
+Name = Annotated[str, Field(pattern=NAME_PATTERN, description="a plain name: no '/', no leading '.'")]
+
+
+class _Strict(BaseModel):
+    model_config = ConfigDict(extra="forbid", strict=True, allow_inf_nan=False, frozen=True)
+
+
+class PoseIn(_Strict):
+    """A planar pose in the ``map`` frame."""
+
+    x: float = Field(description="m")
+    y: float = Field(description="m")
+    yaw: float = Field(description="rad, counter-clockwise from +x")
+
+    def as_tuple(self) -> tuple[float, float, float]:
+        return float(self.x), float(self.y), float(self.yaw)
+
+
+class InlineGrid(_Strict):
+    """An occupancy grid sent inline: ``data[iy][ix]`` in 0..100 (percent) or −1 (unknown), row 0 at
+    the BOTTOM (y = origin y), as ``nav_msgs/OccupancyGrid``; at most ``MAX_INLINE_CELLS`` cells."""
+
+    data: list[list[Annotated[int, Field(ge=-1, le=100)]]] = Field(min_length=1)
+    resolution_m: float = Field(gt=0, le=100)
+    origin: list[float] = Field(default_factory=lambda: [0.0, 0.0, 0.0], min_length=3, max_length=3,
+                                 description="[x m, y m, yaw rad] of the lower-left corner of cell (0, 0)")
+    name: Name = "inline"
+
+    @model_validator(mode="after")
+    def _rectangular(self) -> InlineGrid:
+        width = len(self.data[0])
+        if width == 0 or any(len(row) != width for row in self.data):
+            raise ValueError("data must be a non-empty rectangular list of rows")
+        if width * len(self.data) > MAX_INLINE_CELLS:
+            raise ValueError(f"data has {width * len(self.data)} cells; at most {MAX_INLINE_CELLS} are accepted")
+        return self
+
+
+OptionValue = bool | int | float
+
+
+class PlanRequest(_Strict):
+    """``POST /v1/plan`` and the ``sphereplan/plan`` query: plan from ``start`` to ``goal``."""
+
+    map: Name | InlineGrid = Field(description="name of a map in the maps folder (GET /v1/maps), or an inline grid")
+    start: PoseIn
+    goal: PoseIn
+    robot: Name | None = Field(default=None, description="built-in profile name (GET /v1/robots); default zju-60")
+    time_limit_s: float | None = Field(default=None, gt=0, le=MAX_TIME_LIMIT_S, description="s; default 5")
+    options: dict[Annotated[str, Field(max_length=64)], OptionValue] | None = Field(
+        default=None, max_length=64, description="planner options (PlannerOptions field names)"
+    )
+
+    def request_json(self) -> dict[str, Any]:
+        """The request as plain JSON data (what crosses into a worker process)."""
+        return self.model_dump(mode="json")
+
+
+class GoalMessage(_Strict):
+    """Payload of ``sphereplan/<robot_id>/goal``: plan from the robot's latest pose to ``goal``."""
+
+    map: Name | InlineGrid
+    goal: PoseIn
+    robot: Name | None = None
+    time_limit_s: float | None = Field(default=None, gt=0, le=MAX_TIME_LIMIT_S)
+    options: dict[Annotated[str, Field(max_length=64)], OptionValue] | None = Field(default=None, max_length=64)
+
+    def plan_request(self, start: PoseIn) -> PlanRequest:
+        return PlanRequest(map=self.map, start=start, goal=self.goal, robot=self.robot,
+                           time_limit_s=self.time_limit_s, options=self.options)
+
+
+# ------------------------------------------------------------------------------------ response documentation
+
+
+class _Open(BaseModel):
+    model_config = ConfigDict(extra="allow")
+
+
+class ErrorBody(_Open):
+    """Every error: a Nav2 ``ComputePathToPose`` code (200 = unknown/other for non-planning errors) and a
+    sentence; ``field`` names the offending request field when there is one. A failed plan (422) carries
+    the whole failed-result JSON (``status: failed``), which has these two keys too."""
+
+    error_code: int
+    error_msg: str
+    field: str | None = None
+
+
+class StateOut(_Open):
+    x: float
+    y: float
+    yaw: float
+    roll: float
+    v: float
+    t: float
+    s: float
+    curvature: float
+
+
+class PlanResultOut(_Open):
+    """The plan result JSON of DESIGN.md (the CLI prints the same object)."""
+
+    status: str
+    error_code: int
+    error_msg: str
+    planning_time_s: float
+    length_m: float
+    expansions: int
+    robot: dict[str, Any] | None
+    states: list[StateOut]
+    path: dict[str, Any]
+
+
+class MapInfo(_Open):
+    name: str
+    file: str
+    kind: str
+
+
+class RobotInfo(_Open):
+    name: str
+    radius_m: float
+    max_roll_rad: float
+
+
+class Health(_Open):
+    status: str
+
+
+# ------------------------------------------------------------------------------------------ error messages
+
+# pydantic puts union branch tags ("constrained-str", "InlineGrid", "float" ...) into error locations
+_UNION_TAG = re.compile(r"^(bool|int|float|str|constrained-\w+|function-\w+\[.*\]|[A-Z]\w*|(list|tuple|dict)\[.*\])$")
+_WRONG_TYPE = {"string_type", "dict_type", "model_type", "model_attributes_type", "bool_type", "int_type",
+               "float_type", "list_type", "bool_parsing", "int_from_float"}
+
+
+def field_name(loc: Sequence[int | str]) -> str:
+    """Dotted field name of a pydantic error location (``start.x``, ``map.data[3][1]``), union tags dropped."""
+    out = ""
+    for part in loc:
+        if isinstance(part, int):
+            out += f"[{part}]"
+        elif not _UNION_TAG.match(part) and part != "body":
+            out += f".{part}" if out else part
+    return out or "body"
+
+
+def describe_errors(errors: Sequence[Any]) -> tuple[str, str]:
+    """(field, sentence) for a list of pydantic error dicts: the most specific error first.
+
+    Errors saying "wrong type" for one branch of a union are only reported when nothing more specific
+    was found (``map: "../x"`` reports the name pattern, not "should be an object").
+    """
+    specific = [e for e in errors if e.get("type") not in _WRONG_TYPE] or list(errors)
+    first = max(specific, key=lambda e: len(e.get("loc", ())))
+    if first.get("type") == "json_invalid":
+        loc = first.get("loc", ())
+        where = f" at character {loc[-1]}" if loc and isinstance(loc[-1], int) else ""
+        return "body", f"body: malformed JSON{where}: {(first.get('ctx') or {}).get('error', first.get('msg'))}"
+    field = field_name(first.get("loc", ()))
+    msg = str(first.get("msg", "invalid value"))
+    others = len({f for f in (field_name(e.get("loc", ())) for e in errors) if not field.startswith(f)})
+    return field, f"{field}: {msg}" + (f" (and {others} more field(s))" if others else "")
