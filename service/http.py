@@ -34,7 +34,16 @@ from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
 from planner.errors import InvalidInput, NotFound, SpherePlanError
 from service.core import UNKNOWN_ERROR_CODE, Outcome, PlanningService, ServiceBusy, ServiceSettings
-from service.wire import NAME_PATTERN, ErrorBody, Health, MapInfo, PlanRequest, PlanResultOut, RobotInfo, describe_errors
+from service.wire import (
+    NAME_PATTERN,
+    ErrorBody,
+    Health,
+    MapInfo,
+    PlanRequest,
+    PlanResultOut,
+    RobotInfo,
+    describe_errors,
+)
 
 log = logging.getLogger(__name__)
 
