@@ -87,7 +87,8 @@ def densify_motions(start: np.ndarray, motions: np.ndarray, radius_m: float, spa
     total = 1
     roll = 0.0
     for k in range(motions.shape[0]):
-        total += math.ceil(abs(radius_m * (motions[k, 0] - roll)) / spacing_m) + math.ceil(abs(motions[k, 2]) / spacing_m)
+        total += math.ceil(abs(radius_m * (motions[k, 0] - roll)) / spacing_m)
+        total += math.ceil(abs(motions[k, 2]) / spacing_m)
         roll = motions[k, 0]
     out = np.empty((total, 5))
     x, y, yaw, roll = start[0], start[1], start[2], 0.0

@@ -26,11 +26,18 @@ nearest pixel value that does is used, so a round trip never changes a cell.
 
 Meshes (``.stl/.obj/.ply``) are sliced into grids by :mod:`planner.mesh_world`; ``load_any`` picks the
 loader from the file extension.
+
+The shipped maps folder is found by :func:`default_maps_dir` (``$SPHEREPLAN_MAPS``, else ``<repo>/maps``
+next to the ``planner`` package); :func:`list_maps`, :func:`list_problems` and :func:`load_problem_set`
+describe its contents for the CLI, the benchmark and the service.
 """
 
 from __future__ import annotations
 
+import json
 import math
+import os
+from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -38,7 +45,7 @@ import numpy as np
 import yaml
 from PIL import Image, UnidentifiedImageError
 
-from planner.errors import MapError
+from planner.errors import InvalidInput, MapError, NotFound
 from planner.occupancy import OCCUPIED, UNKNOWN, OccupancyGrid
 
 if TYPE_CHECKING:
@@ -131,7 +138,10 @@ def _parse_params(doc: dict[str, Any]) -> dict[str, Any]:
 
 
 def _read_image(path: Path) -> tuple[np.ndarray, np.ndarray | None]:
-    """Read a PGM or PNG; returns (rgb (h, w, 3) in [0, 255], alpha (h, w) in [0, 255] or None), floats."""
+    """Read a PGM or PNG; returns (colour (h, w, 1 or 3) in [0, 255], alpha (h, w) in [0, 255] or None).
+
+    A grey image comes back with one channel, which stands for three equal R, G, B channels.
+    """
     if not path.is_file():
         raise MapError("image", f"image file {str(path)!r} does not exist")
     try:
@@ -151,7 +161,12 @@ def _read_image(path: Path) -> tuple[np.ndarray, np.ndarray | None]:
                 maxval = 65535.0 if grey.max(initial=0) > 255 or mode.startswith("I;16") else 255.0
                 grey = grey * (255.0 / maxval)
                 return np.repeat(grey[:, :, None], 3, axis=2), None
-            has_alpha = mode in ("LA", "RGBA", "PA") or "transparency" in img.info
+            if mode == "L" and "transparency" not in img.info:  # the common case: grey, one channel
+                return np.asarray(img, dtype=np.float64)[:, :, None], None
+            if mode == "LA":
+                la = np.asarray(img, dtype=np.float64)
+                return la[:, :, :1], la[:, :, 1]
+            has_alpha = mode in ("RGBA", "PA") or "transparency" in img.info
             rgba = np.asarray(img.convert("RGBA" if has_alpha else "RGB"), dtype=np.float64)
     except MapError:
         raise
@@ -172,13 +187,14 @@ def decode_pixels(
 ) -> np.ndarray:
     """Turn image pixels (row 0 = top) into occupancy values (row 0 = top) by nav2's rules.
 
-    ``rgb``: (h, w, 3) channel values in [0, 255]; ``alpha``: (h, w) in [0, 255] (255 = opaque) or None.
-    Returns an int8 (h, w) array of 0..100 / −1.
+    ``rgb``: (h, w, 3) channel values in [0, 255], or (h, w, 1) for grey (= three equal channels);
+    ``alpha``: (h, w) in [0, 255] (255 = opaque) or None. Returns an int8 (h, w) array of 0..100 / −1.
     """
+    rgb_sum = rgb[:, :, 0] * 3.0 if rgb.shape[2] == 1 else rgb.sum(axis=2)
     if mode == "trinary" and alpha is not None:
-        shade = (rgb.sum(axis=2) + alpha) / (4.0 * 255.0)
+        shade = (rgb_sum + alpha) / (4.0 * 255.0)
     else:
-        shade = rgb.sum(axis=2) / (3.0 * 255.0)
+        shade = rgb_sum / (3.0 * 255.0)
     occ = shade if negate else 1.0 - shade
     if mode == "trinary":
         out = np.where(occ > occupied_thresh, OCCUPIED, np.where(occ < free_thresh, 0, UNKNOWN))
@@ -378,3 +394,174 @@ def mesh_path_of(grid: OccupancyGrid) -> Path | None:
     if not mesh_path.is_absolute() and grid.source.get("yaml_path"):
         mesh_path = Path(str(grid.source["yaml_path"])).parent / mesh_path
     return mesh_path
+
+
+# ---------------------------------------------------------------------------------------------- catalogue
+
+MAPS_ENV = "SPHEREPLAN_MAPS"
+
+
+def default_maps_dir() -> Path:
+    """The folder of shipped maps: ``$SPHEREPLAN_MAPS`` if set, else ``<repo>/maps`` beside ``planner/``.
+
+    The second works for a source checkout or an editable install (the maps are not packaged into
+    wheels). Raises :class:`NotFound` (field ``maps``) if the folder does not exist.
+    """
+    env = os.environ.get(MAPS_ENV)
+    folder = Path(env) if env else Path(__file__).resolve().parent.parent / "maps"
+    if not folder.is_dir():
+        how = f"${MAPS_ENV}" if env else "the repository's maps folder"
+        raise NotFound("maps", f"{how} {str(folder)!r} is not a directory")
+    return folder
+
+
+def _image_size(yaml_path: Path) -> tuple[int, int] | None:
+    """(width, height) in pixels of a map YAML's image, read from the header only; None if unreadable."""
+    try:
+        doc = yaml.safe_load(yaml_path.read_text())
+        image = Path(str(doc["image"]))
+        if not image.is_absolute():
+            image = yaml_path.parent / image
+        with Image.open(image) as img:
+            return int(img.size[0]), int(img.size[1])
+    except (OSError, yaml.YAMLError, KeyError, TypeError, UnidentifiedImageError):
+        return None
+
+
+def list_maps(folder: str | Path | None = None) -> list[dict[str, Any]]:
+    """Describe every map in ``folder`` (default :func:`default_maps_dir`), sorted by file name.
+
+    Each entry: ``name`` (file stem), ``file``, ``kind`` (``grid`` for YAML, ``mesh`` for
+    .stl/.obj/.ply), ``size_m`` [x, y], ``resolution_m`` (None for meshes) and, for grids sliced from a
+    mesh, ``mesh``. Files that cannot be read are listed with ``error`` instead of sizes.
+    """
+    root = Path(folder) if folder is not None else default_maps_dir()
+    if not root.is_dir():
+        raise NotFound("maps", f"{str(root)!r} is not a directory")
+    entries: list[dict[str, Any]] = []
+    for path in sorted(root.iterdir()):
+        suffix = path.suffix.lower()
+        if suffix in YAML_SUFFIXES:
+            entry: dict[str, Any] = {"name": path.stem, "file": path.name, "kind": "grid"}
+            try:
+                doc = yaml.safe_load(path.read_text())
+                resolution = float(doc["resolution"])
+                size = _image_size(path)
+                if size is None:
+                    raise ValueError("image unreadable")
+                entry["size_m"] = [round(size[0] * resolution, 6), round(size[1] * resolution, 6)]
+                entry["resolution_m"] = resolution
+                if doc.get("mesh"):
+                    entry["mesh"] = str(doc["mesh"])
+            except (OSError, yaml.YAMLError, KeyError, TypeError, ValueError, AttributeError) as exc:
+                entry["error"] = f"unreadable map: {exc}"
+            entries.append(entry)
+        elif suffix in MESH_SUFFIXES:
+            entry = {"name": path.stem, "file": path.name, "kind": "mesh", "resolution_m": None}
+            try:
+                from planner.mesh_world import MeshWorld
+
+                (x0, y0, _), (x1, y1, _) = MeshWorld.from_file(path).mesh.bounds
+                entry["size_m"] = [round(float(x1 - x0), 3), round(float(y1 - y0), 3)]
+            except MapError as exc:
+                entry["error"] = str(exc)
+            entries.append(entry)
+    return entries
+
+
+@dataclass(frozen=True)
+class Problem:
+    """One planning problem: poses are (x m, y m, yaw rad) in the map frame."""
+
+    name: str
+    map: str
+    map_path: Path
+    start: tuple[float, float, float]
+    goal: tuple[float, float, float]
+    solvable: bool
+    time_limit_s: float
+
+    def to_json(self) -> dict[str, Any]:
+        return {
+            "name": self.name,
+            "map": self.map,
+            "start": list(self.start),
+            "goal": list(self.goal),
+            "solvable": self.solvable,
+            "time_limit_s": self.time_limit_s,
+        }
+
+
+def _pose(value: Any, field: str) -> tuple[float, float, float]:
+    if (
+        not isinstance(value, list)
+        or len(value) != 3
+        or not all(isinstance(v, int | float) and not isinstance(v, bool) for v in value)
+        or not all(math.isfinite(v) for v in value)
+    ):
+        raise InvalidInput(field, f"must be three finite numbers [x, y, yaw], got {value!r}")
+    return float(value[0]), float(value[1]), float(value[2])
+
+
+def load_problem_set(path: str | Path) -> list[Problem]:
+    """Read and validate a problem-set JSON: a list of {name, map, start, goal, solvable, time_limit_s}.
+
+    ``map`` is a map file name resolved against the JSON's folder, then its parent (so
+    ``maps/problems/garage.json`` may say ``"map": "garage.yaml"``). Errors name the field as
+    ``problems[i].field``; names must be unique within the set.
+    """
+    p = Path(path)
+    if not p.is_file():
+        raise NotFound("problems", f"problem set {str(p)!r} does not exist")
+    try:
+        doc = json.loads(p.read_text())
+    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
+        raise InvalidInput("problems", f"{p.name} is not valid JSON: {exc}") from None
+    if not isinstance(doc, list) or not doc:
+        raise InvalidInput("problems", f"{p.name} must hold a non-empty JSON list of problems")
+    problems: list[Problem] = []
+    seen: set[str] = set()
+    for i, item in enumerate(doc):
+        where = f"problems[{i}]"
+        if not isinstance(item, dict):
+            raise InvalidInput(where, f"must be an object, got {type(item).__name__}")
+        for key in ("name", "map", "start", "goal", "solvable", "time_limit_s"):
+            if key not in item:
+                raise InvalidInput(f"{where}.{key}", "required field missing")
+        name, map_name = item["name"], item["map"]
+        if not isinstance(name, str) or not name:
+            raise InvalidInput(f"{where}.name", f"must be a non-empty string, got {name!r}")
+        if name in seen:
+            raise InvalidInput(f"{where}.name", f"duplicate problem name {name!r}")
+        seen.add(name)
+        if not isinstance(map_name, str) or not map_name:
+            raise InvalidInput(f"{where}.map", f"must be a map file name, got {map_name!r}")
+        candidates = [p.parent / map_name, p.parent.parent / map_name]
+        map_path = next((c for c in candidates if c.is_file()), None)
+        if map_path is None:
+            raise NotFound(f"{where}.map", f"map {map_name!r} not found beside {p.name} nor one folder up")
+        if not isinstance(item["solvable"], bool):
+            raise InvalidInput(f"{where}.solvable", f"must be true or false, got {item['solvable']!r}")
+        limit = item["time_limit_s"]
+        number = isinstance(limit, int | float) and not isinstance(limit, bool)
+        if not number or not (math.isfinite(limit) and limit > 0):
+            raise InvalidInput(f"{where}.time_limit_s", f"must be a number > 0, got {limit!r}")
+        problems.append(
+            Problem(
+                name=name,
+                map=map_name,
+                map_path=map_path,
+                start=_pose(item["start"], f"{where}.start"),
+                goal=_pose(item["goal"], f"{where}.goal"),
+                solvable=item["solvable"],
+                time_limit_s=float(limit),
+            )
+        )
+    return problems
+
+
+def list_problems(folder: str | Path | None = None) -> list[Problem]:
+    """Every problem of every set in ``<folder>/problems/*.json`` (default :func:`default_maps_dir`)."""
+    root = Path(folder) if folder is not None else default_maps_dir()
+    sets = sorted((root / "problems").glob("*.json"))
+    return [problem for path in sets for problem in load_problem_set(path)]

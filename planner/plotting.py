@@ -38,7 +38,7 @@ def plot_plan(
     if states is not None and len(states) > 1:
         pts = states[:, :2]
         segs = np.stack([pts[:-1], pts[1:]], axis=1)
-        lc = LineCollection(segs, cmap="coolwarm", linewidths=2.2)
+        lc = LineCollection(list(segs), cmap="coolwarm", linewidths=2.2)
         lim = math.degrees(robot.max_roll_rad)
         lc.set_array(np.degrees(states[:-1, 3]))
         lc.set_clim(-lim, lim)

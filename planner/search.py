@@ -73,7 +73,7 @@ class PlannerOptions:
     switch_cost_m: float = 1.0
     cost_penalty: float = 0.5         # proximity weight (Nav2 ``cost_penalty``)
     proximity_range_m: float = 0.3    # proximity cost fades to 0 this far beyond the inflated obstacles
-    greed: float = 0.5               # paper eq. 14j; 0 = admissible A* (slow with 7 rolls × 72 bins)
+    greed: float = 1.0               # eq. 14j; 0 = admissible A* (slow: 7 rolls × 72 bins); smoothing recovers length
     analytic_ratio_m: float = 3.5     # try a Dubins shot every max(1, h / ratio) expansions
     heuristic_downsample: int = 2
     time_limit_s: float = 5.0

@@ -59,13 +59,14 @@ def run(args: argparse.Namespace) -> int:
     if not Path(args.map).exists():
         raise InvalidInput("--map", f"{args.map} does not exist")
     grid = load_any(args.map, robot)
-    start, goal = tuple(args.start), tuple(args.goal)
+    start = (args.start[0], args.start[1], args.start[2])
+    goal = (args.goal[0], args.goal[1], args.goal[2])
     try:
-        result = plan_path(grid, robot, start, goal, options)  # type: ignore[arg-type]
+        result = plan_path(grid, robot, start, goal, options)
     except PlanningError as exc:
         emit_json(failure_json(exc.code, exc.msg, robot), args.out)
         if args.plot:
-            plot_plan(grid, robot, None, start, goal, args.plot, title=f"{grid.name}: no path ({exc.code})")  # type: ignore[arg-type]
+            plot_plan(grid, robot, None, start, goal, args.plot, title=f"{grid.name}: no path ({exc.code})")
         if exc.code in BAD_ENDPOINT_CODES:
             sys.stderr.write(f"sphereplan plan: error: {exc.msg}\n")
             return EXIT_BAD_INPUT
@@ -73,6 +74,6 @@ def run(args: argparse.Namespace) -> int:
         return EXIT_TIMEOUT if exc.code == 207 else EXIT_NO_SOLUTION
     emit_json(result.to_json(), args.out)
     if args.plot:
-        plot_plan(grid, robot, result.states, start, goal, args.plot,  # type: ignore[arg-type]
+        plot_plan(grid, robot, result.states, start, goal, args.plot,
                   title=f"{grid.name}: {robot.name}, {result.length_m:.2f} m in {result.planning_time_s * 1000:.0f} ms")
     return EXIT_OK

@@ -121,6 +121,14 @@ def test_trinary_averages_alpha_in(tmp_path: Path) -> None:
     assert grid.data[0].tolist() == [-1, 0]
 
 
+def test_trinary_grey_alpha_counts_grey_three_times(tmp_path: Path) -> None:
+    # nav2 sees a grey+alpha pixel as R = G = B = grey plus alpha: shade = (3 g + a) / (4 · 255).
+    # g = 255, a = 0 → 0.75 → occ 0.25 → unknown; g = 0, a = 255 → 0.25 → occ 0.75 → occupied.
+    px = np.array([[[255, 0], [0, 255], [255, 255]]], dtype=np.uint8)
+    grid = load_map(write_map(tmp_path, px, image="m.png"))
+    assert grid.data[0].tolist() == [-1, 100, 0]
+
+
 def test_rgb_pixels_use_channel_mean() -> None:
     rgb = np.array([[[255, 0, 0], [255, 255, 0]]], dtype=np.float64)  # shade 1/3, 2/3
     out = decode_pixels(rgb, None, "trinary", False, 0.65, 0.196)

@@ -1,0 +1,171 @@
+"""``sphereplan simulate``: roll a plan in closed loop (simulator + localisation + MPC) and report metrics.
+
+sphereplan simulate --map M.yaml --path PLAN.json [--robot P] [--seed N] [--noise none|default]
+                    [--tracker mpc|pursuit] --out SIM.json [--plot SIM.png]
+sphereplan simulate --track [--map M.yaml] ...     paper 001's 16.2 m × 8.4 m clockwise lap
+sphereplan simulate --bench                        MPC step-time table
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from planner.errors import InvalidInput, NotFound
+from service.cli._io import emit_json, positive_float
+
+VERB = "simulate"
+HELP = "roll a plan in closed loop (paper 001 MPC + odometry/GNSS fusion) and report tracking metrics"
+
+
+def _seed(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not an integer") from None
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"{text!r} must be >= 0")
+    return value
+
+
+def _positive_int(text: str) -> int:
+    value = _seed(text)
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"{text!r} must be >= 1")
+    return value
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    src = parser.add_mutually_exclusive_group()
+    src.add_argument("--path", metavar="PLAN.json", help="plan result JSON (from `sphereplan plan`)")
+    src.add_argument(
+        "--track",
+        action="store_true",
+        help="roll paper 001's 16.2 m x 8.4 m track clockwise (centred on the map)",
+    )
+    src.add_argument("--bench", action="store_true", help="print the MPC step-time table and exit")
+    parser.add_argument(
+        "--map", metavar="M.yaml", help="ROS map_server YAML (optional with --track: open field)"
+    )
+    parser.add_argument("--robot", metavar="P", help="robot profile name or TOML (default: the plan's robot)")
+    parser.add_argument("--seed", type=_seed, default=0, help="seed of every disturbance (default 0)")
+    parser.add_argument("--noise", choices=("none", "default"), default="default", help="disturbances")
+    parser.add_argument(
+        "--tracker",
+        choices=("mpc", "pursuit"),
+        default="mpc",
+        help="mpc = paper 001 eq. 15 with pure-pursuit fallback; pursuit = geometric only",
+    )
+    parser.add_argument("--rate", type=positive_float, default=50.0, metavar="HZ", help="control rate (50)")
+    parser.add_argument("--horizon", type=_positive_int, default=15, metavar="N", help="MPC horizon (15)")
+    parser.add_argument(
+        "--corner-radius",
+        type=positive_float,
+        default=1.5,
+        metavar="M",
+        help="--track corner radius (m, >= the robot's minimum turning radius)",
+    )
+    parser.add_argument(
+        "--time-limit", type=positive_float, metavar="S", help="stop after S simulated seconds"
+    )
+    parser.add_argument("--out", metavar="SIM.json", help="write the result here (default: stdout)")
+    parser.add_argument("--plot", metavar="SIM.png", help="also draw the run")
+    parser.set_defaults(func=run)
+
+
+def _read_plan(path: str) -> dict[str, Any]:
+    p = Path(path)
+    if not p.is_file():
+        raise NotFound("path", f"plan file {path} does not exist")
+    try:
+        plan = json.loads(p.read_text())
+    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
+        raise InvalidInput("path", f"{path} is not valid JSON: {exc}") from None
+    if not isinstance(plan, dict):
+        raise InvalidInput("path", "must be a plan result object")
+    states = plan.get("states")
+    if not isinstance(states, list) or len(states) < 2:
+        status = plan.get("status", "?")
+        raise InvalidInput("path", f"has no path to roll (status {status!r}, needs at least two states)")
+    return plan
+
+
+def _bench() -> int:
+    from planner.simulate import bench_mpc
+
+    rows = bench_mpc()
+    sys.stdout.write(
+        f"{'robot':8} {'qpsol':6} {'N':>3} {'steps':>6} {'p50 ms':>8} {'p95 ms':>8} {'fallback':>8}\n"
+    )
+    for r in rows:
+        sys.stdout.write(
+            f"{r['robot']:8} {r['qpsol']:6} {r['horizon']:>3} {r['steps']:>6} {r['p50_ms']:>8.2f} "
+            f"{r['p95_ms']:>8.2f} {r['fallback_steps']:>8}\n"
+        )
+    return 0
+
+
+def run(args: argparse.Namespace) -> int:
+    if args.bench:
+        return _bench()
+    from planner.occupancy import OccupancyGrid
+    from planner.robot import RobotProfile, load_robot
+    from planner.simulate import SimulationOptions, simulate_plan
+    from planner.synthetic_paths import track_plan
+    from planner.tracker import MPCParams
+
+    if not args.path and not args.track:
+        raise InvalidInput("path", "give --path PLAN.json or --track")
+    given = _read_plan(args.path) if args.path else None
+    if args.map:
+        from planner.mapio import load_map  # the map loader (ROS map_server YAML + PGM)
+
+        grid = load_map(args.map)
+    elif args.track:
+        grid = OccupancyGrid.from_occupied(
+            np.zeros((248, 404), dtype=bool), 0.05, (-2.0, -2.0, 0.0), name="field"
+        )
+    else:
+        raise InvalidInput("map", "is required with --path")
+
+    robot: RobotProfile | None
+    if args.track:
+        robot = load_robot(args.robot)
+        (ox, oy, _), (w, h) = grid.origin, grid.size_m
+        x0, y0 = ox + (w - 16.2) / 2, oy + (h - 8.4) / 2
+        if w < 16.2 + 2 * robot.footprint_width_m or h < 8.4 + 2 * robot.footprint_width_m:
+            raise InvalidInput(
+                "track", f"the 16.2 m x 8.4 m track does not fit the {w:.1f} m x {h:.1f} m map"
+            )
+        plan = track_plan(robot, corner_radius_m=args.corner_radius, origin=(x0, y0))
+    else:
+        assert given is not None
+        plan = given
+        robot = load_robot(args.robot) if args.robot else None
+
+    options = SimulationOptions(
+        control_rate_hz=args.rate,
+        tracker=args.tracker,
+        mpc=MPCParams(horizon=args.horizon),
+        time_limit_s=args.time_limit,
+    )
+    result = simulate_plan(grid, plan, robot, seed=args.seed, noise=args.noise, options=options)
+    if args.plot:
+        from planner.sim_plot import plot_simulation
+
+        plot_simulation(grid, plan, result, args.plot)
+    emit_json(result, args.out)
+    m = result["metrics"]
+    if args.out:
+        sys.stderr.write(
+            f"cross-track rms {m['cross_track_rms_m']:.3f} m, max {m['cross_track_max_m']:.3f} m; final "
+            f"error {m['final_position_error_m']:.3f} m; clearance {m['min_clearance_m']:.3f} m; "
+            f"fallback steps {m['fallback_steps']}; fused error max {m['estimate_error_max_m']:.3f} m vs "
+            f"odometry {m['odometry_error_max_m']:.3f} m\n"
+        )
+    return 0

@@ -1,0 +1,88 @@
+"""``sphereplan tensegrity``: statics, rolling gaits and form finding of the TeXploR robot (paper 002)."""
+
+from __future__ import annotations
+
+import argparse
+import math
+
+from planner.errors import InvalidInput
+from planner.robot import load_robot
+from planner.tensegrity import form_find, plan_gait, static_equilibria
+from planner.tensegrity.geometry import params_from_profile
+from planner.tensegrity.plot import plot_gait
+from service.cli._io import emit_json, finite_float
+
+VERB = "tensegrity"
+HELP = "two-arc tensegrity robot (TeXploR): static states, rolling gaits, form finding"
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    sub = parser.add_subparsers(dest="tensegrity_command", required=True)
+
+    static = sub.add_parser("static", help="the four hybrid static states for slider angles θ1, θ2")
+    static.add_argument(
+        "--theta1", type=finite_float, required=True, help="slider 1 angle (rad, or deg with --degrees)"
+    )
+    static.add_argument(
+        "--theta2", type=finite_float, required=True, help="slider 2 angle (rad, or deg with --degrees)"
+    )
+    static.add_argument("--degrees", action="store_true", help="θ1, θ2 are in degrees")
+    static.add_argument("--no-verify", action="store_true", help="skip the potential-energy cross-check")
+    static.add_argument("--robot", default="texplor", help="profile name or TOML path (default texplor)")
+    static.add_argument("--out", help="write the JSON here instead of stdout")
+
+    gait = sub.add_parser("gait", help="slider trajectories that roll the robot a distance")
+    gait.add_argument("--distance", type=finite_float, required=True, help="metres; negative = reverse gait")
+    gait.add_argument("--steps", type=int, default=32, help="samples per state leg (default 32)")
+    gait.add_argument("--start-state", type=int, default=1, help="hybrid state at the start (1-4, default 1)")
+    gait.add_argument("--corner", type=finite_float, help="slider path corner θ1 in degrees (default 45)")
+    gait.add_argument(
+        "--measure",
+        choices=("net", "rolled"),
+        default="net",
+        help="distance = net advance of the centre (default) or rolled contact length Σ r|Δφ|",
+    )
+    gait.add_argument("--robot", default="texplor", help="profile name or TOML path (default texplor)")
+    gait.add_argument("--out", help="write the JSON here instead of stdout")
+    gait.add_argument("--plot", help="write a Fig. 9-style PNG here")
+
+    formfind = sub.add_parser("formfind", help="cable-energy form finding (eq. 18): T12 and cable lengths")
+    formfind.add_argument(
+        "--fix-centre", action="store_true", help="keep the arc centres coincident (o12 = 0)"
+    )
+    formfind.add_argument("--starts", type=int, default=16, help="optimiser starts (default 16)")
+    formfind.add_argument("--seed", type=int, default=0, help="seed of the random starts")
+    formfind.add_argument("--robot", default="texplor", help="profile name or TOML path (default texplor)")
+    formfind.add_argument("--out", help="write the JSON here instead of stdout")
+    parser.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    """Dispatch ``sphereplan tensegrity static|gait|formfind``; returns the exit code."""
+    commands = {"static": _run_static, "gait": _run_gait, "formfind": _run_formfind}
+    return commands[args.tensegrity_command](args)
+
+
+def _run_static(args: argparse.Namespace) -> int:
+    to_rad = math.radians if args.degrees else float
+    result = static_equilibria(
+        to_rad(args.theta1), to_rad(args.theta2), load_robot(args.robot), not args.no_verify
+    )
+    emit_json(result, args.out)
+    return 0
+
+
+def _run_gait(args: argparse.Namespace) -> int:
+    profile = load_robot(args.robot)
+    result = plan_gait(args.distance, profile, args.steps, args.start_state, args.corner, args.measure)
+    if args.plot:
+        plot_gait(result, params_from_profile(profile), args.plot)
+    if not args.out:
+        raise InvalidInput("out", "the gait JSON is long; give --out FILE.json")
+    emit_json(result, args.out)
+    return 0
+
+
+def _run_formfind(args: argparse.Namespace) -> int:
+    emit_json(form_find(load_robot(args.robot), args.fix_centre, args.starts, args.seed), args.out)
+    return 0

@@ -1,0 +1,48 @@
+"""The holonomic heuristic never exceeds the true cost."""
+
+import math
+
+import numpy as np
+
+from planner.heuristics import HolonomicHeuristic
+from planner.occupancy import OccupancyGrid
+from planner.robot import load_robot
+from planner.search import HybridAStar, PlannerOptions
+
+
+def _heuristic(planner, goal, opts):
+    c = planner.clearance
+    return HolonomicHeuristic(c.clearance, (c.origin_x, c.origin_y), planner.grid.resolution_m, goal,
+                              planner.centre_threshold_m, planner.footprint.radius_m, opts.proximity_range_m,
+                              opts.cost_penalty, opts.heuristic_downsample)
+
+
+def test_never_exceeds_euclidean_in_open_space():
+    grid = OccupancyGrid.from_occupied(np.zeros((200, 200), bool), 0.05)
+    planner = HybridAStar(grid, load_robot(), PlannerOptions(cost_penalty=0.0))
+    goal = (5.0, 5.0)
+    h = _heuristic(planner, goal, planner.options)
+    rng = np.random.default_rng(5)
+    for x, y in rng.uniform(1.0, 9.0, (500, 2)):
+        assert h(x, y) <= math.hypot(x - goal[0], y - goal[1]) + 1e-9
+
+
+def test_never_exceeds_the_planned_cost_with_obstacles():
+    occ = np.zeros((240, 240), bool)
+    occ[:3] = occ[-3:] = True
+    occ[:, :3] = occ[:, -3:] = True
+    occ[0:160, 115:125] = True
+    grid = OccupancyGrid.from_occupied(occ, 0.05)
+    opts = PlannerOptions(greed=0.5, smooth=False, time_limit_s=20)
+    planner = HybridAStar(grid, load_robot(), opts)
+    goal = (10.0, 2.0, 0.0)
+    h = _heuristic(planner, goal[:2], opts)
+    rng = np.random.default_rng(9)
+    checked = 0
+    while checked < 4:
+        x, y = rng.uniform(1.0, 4.0), rng.uniform(6.0, 10.5)
+        if planner.pose_margin((x, y, 0.0)) < 0.1:
+            continue
+        result = planner.plan((x, y, 0.0), goal)
+        assert h(x, y) <= result.length_m + 1e-9
+        checked += 1

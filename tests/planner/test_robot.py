@@ -1,0 +1,54 @@
+"""Robot profiles and the roll→curvature models."""
+
+import math
+
+import numpy as np
+import pytest
+
+from planner.errors import NotFound, RobotProfileError
+from planner.robot import builtin_robots, load_robot
+
+
+def test_builtins_load():
+    assert {"zju-60", "zju-80", "daedalus"} <= set(builtin_robots())
+    r = load_robot()
+    assert r.name == "zju-60" and r.radius_m == 0.30 and math.isclose(r.max_roll_rad, math.radians(15))
+    assert math.isclose(r.min_turning_radius_m, 0.30 / math.tan(math.radians(15)))
+    assert load_robot("zju-80").radius_m == 0.40
+
+
+def test_calibrated_table_reproduces_paper_000_runs_and_round_trips():
+    d = load_robot("daedalus")
+    for deg, diameter in ((5, 2.6), (10, 2.0), (15, 1.7)):
+        assert math.isclose(d.roll_model.turning_radius(math.radians(deg)) * 2, diameter, rel_tol=1e-9)
+    k = np.linspace(-1.1, 1.1, 41)
+    assert np.allclose(d.roll_model.curvature(d.roll_model.roll_for_curvature(k)), k, atol=1e-3)
+    # beyond the measured range the curvature is held, never extrapolated
+    assert d.roll_model.curvature(math.radians(25)) == pytest.approx(1 / 0.85)
+
+
+def test_kinematic_model_is_tan_over_r():
+    r = load_robot()
+    assert r.roll_model.curvature(0.2) == pytest.approx(math.tan(0.2) / 0.3)
+    assert r.roll_model.roll_for_curvature(math.tan(0.2) / 0.3) == pytest.approx(0.2)
+
+
+def test_user_profile_and_errors(tmp_path):
+    good = tmp_path / "mine.toml"
+    good.write_text(
+        'radius_m = 0.5\nmax_roll_deg = 10\nmax_roll_rate_deg_s = 20\nroll_time_constant_s = 0.2\n'
+        'max_speed_m_s = 1\nmax_accel_m_s2 = 1\nfootprint_length_m = 1\nfootprint_width_m = 1\n'
+    )
+    assert load_robot(str(good)).name == "mine"
+    bad = tmp_path / "bad.toml"
+    bad.write_text(good.read_text().replace("radius_m = 0.5", "radius_m = -1"))
+    with pytest.raises(RobotProfileError, match="radius_m"):
+        load_robot(str(bad))
+    bad.write_text(good.read_text().replace("max_roll_deg = 10\n", ""))
+    with pytest.raises(RobotProfileError, match="max_roll_deg"):
+        load_robot(str(bad))
+    bad.write_text("radius_m = [")
+    with pytest.raises(RobotProfileError, match="TOML"):
+        load_robot(str(bad))
+    with pytest.raises(NotFound, match="robot"):
+        load_robot("no-such-robot")

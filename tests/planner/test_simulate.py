@@ -1,0 +1,82 @@
+"""The closed loop: determinism, the paper's positioning run, footprint clearance, the benchmark rows."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from planner.occupancy import OccupancyGrid
+from planner.robot import load_robot
+from planner.simulate import SimulationOptions, bench_mpc, footprint_clearance, simulate_plan
+from planner.simulator import Disturbances
+from planner.synthetic_paths import s_curve_plan, track_plan
+
+ROBOT = load_robot("zju-60")
+FIELD = OccupancyGrid.from_occupied(np.zeros((248, 404), dtype=bool), 0.05, (-2.0, -2.0, 0.0))
+PURSUIT = SimulationOptions(tracker="pursuit")
+
+
+def test_same_seed_same_run_other_seed_other_run() -> None:
+    plan = s_curve_plan(ROBOT)
+    a = simulate_plan(FIELD, plan, ROBOT, seed=7, noise="default")
+    b = simulate_plan(FIELD, plan, ROBOT, seed=7, noise="default")
+    c = simulate_plan(FIELD, plan, ROBOT, seed=8, noise="default")
+    assert a["trajectory"] == b["trajectory"] and a["estimate"] == b["estimate"]
+    assert a["trajectory"] != c["trajectory"]
+    assert set(a["metrics"]) >= {
+        "cross_track_rms_m",
+        "cross_track_max_m",
+        "final_position_error_m",
+        "final_yaw_error_rad",
+        "min_clearance_m",
+        "collided",
+        "duration_s",
+        "fallback_steps",
+        "mpc_solve_ms_p50",
+        "mpc_solve_ms_p95",
+    }
+    assert set(a["trajectory"][0]) == {"t", "x", "y", "yaw", "roll", "v"}
+    assert set(a["commands"][0]) == {"t", "v", "roll"}
+
+
+def test_track_loop_odometry_drifts_the_fused_estimate_does_not() -> None:
+    """Paper 001 §6 / Fig. 7: one clockwise lap of the 16.2 m × 8.4 m track."""
+    plan = track_plan(ROBOT)
+    m = simulate_plan(FIELD, plan, ROBOT, seed=1, noise="default", options=PURSUIT)["metrics"]
+    assert m["reached_goal"] and not m["collided"]
+    assert m["odometry_error_final_m"] > 0.3  # accumulated yaw error rotates the odometry lap
+    assert m["estimate_error_max_m"] < 0.2
+    assert m["estimate_error_rms_m"] < m["odometry_error_rms_m"] / 5
+
+
+def test_gnss_denied_the_estimate_is_the_odometry() -> None:
+    plan = s_curve_plan(ROBOT)
+    denied = Disturbances(**{**Disturbances.default().__dict__, "gnss_available": False})
+    sim = simulate_plan(FIELD, plan, ROBOT, seed=2, noise=denied, options=PURSUIT)
+    assert sim["gnss"] == []
+    assert sim["estimate"] == sim["odometry"]
+
+
+def test_footprint_clearance_against_a_wall() -> None:
+    occ = np.zeros((80, 80), dtype=bool)
+    occ[:, 60:] = True  # wall from x = 3.0 m
+    grid = OccupancyGrid.from_occupied(occ, 0.05)
+    half_l, half_w = ROBOT.footprint_length_m / 2, ROBOT.footprint_width_m / 2
+    assert footprint_clearance(grid, ROBOT, np.array([[2.0, 2.0, 0.0]])) == pytest.approx(1.0 - half_l)
+    assert footprint_clearance(grid, ROBOT, np.array([[2.0, 2.0, math.pi / 2]])) == pytest.approx(
+        1.0 - half_w
+    )
+    diag = math.hypot(half_l, half_w)
+    yaw = math.atan2(half_w, half_l)  # a corner points straight at the wall
+    assert footprint_clearance(grid, ROBOT, np.array([[2.0, 2.0, -yaw]])) == pytest.approx(1.0 - diag)
+    assert footprint_clearance(grid, ROBOT, np.array([[2.8, 2.0, 0.0]])) == 0.0
+    # the map's edge counts as an obstacle (y = 0 is the bottom edge)
+    assert footprint_clearance(grid, ROBOT, np.array([[1.0, 0.5, 0.0]])) == pytest.approx(0.5 - half_w)
+
+
+def test_bench_rows() -> None:
+    rows = bench_mpc(horizons=(8,), steps=20)
+    assert len(rows) == 1 and rows[0]["horizon"] == 8 and rows[0]["steps"] >= 20
+    assert 0 < rows[0]["p50_ms"] <= rows[0]["p95_ms"]

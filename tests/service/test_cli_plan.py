@@ -1,0 +1,77 @@
+"""``sphereplan plan``: exit codes, JSON contract, plot."""
+
+import json
+
+import pytest
+
+from planner.mapio import default_maps_dir
+from service.cli import main
+
+GARAGE = str(default_maps_dir() / "garage.yaml")
+
+
+def run(capsys, *argv):
+    code = main(list(argv))
+    out = capsys.readouterr()
+    return code, out.out, out.err
+
+
+def test_plan_prints_the_result_contract(capsys, tmp_path):
+    png = tmp_path / "plan.png"
+    code, out, _ = run(capsys, "plan", "--map", GARAGE, "--start", "3.5", "8.05", "0", "--goal", "20", "8.05", "0",
+                       "--plot", str(png))
+    assert code == 0
+    data = json.loads(out)
+    assert data["status"] == "exact" and data["error_code"] == 0
+    for key in ("planning_time_s", "length_m", "expansions", "robot", "states", "path"):
+        assert key in data
+    assert {"radius_m", "max_roll_rad", "footprint_length_m", "footprint_width_m"} <= set(data["robot"])
+    assert set(data["states"][0]) == {"x", "y", "yaw", "roll", "v", "t", "s", "curvature"}
+    assert data["path"]["header"]["frame_id"] == "map"
+    assert len(data["path"]["poses"]) == len(data["states"])
+    assert png.stat().st_size > 10_000
+
+
+def test_out_file_and_robot_option(capsys, tmp_path):
+    out = tmp_path / "p.json"
+    code, stdout, _ = run(capsys, "plan", "--map", GARAGE, "--start", "3.5", "8.05", "0", "--goal", "12", "8.05", "0",
+                          "--robot", "daedalus", "--out", str(out))
+    assert code == 0 and stdout == ""
+    assert json.loads(out.read_text())["robot"]["name"] == "daedalus"
+
+
+@pytest.mark.parametrize(
+    ("argv", "field"),
+    [
+        (["--start", "3.5", "8.05", "nan", "--goal", "12", "8.05", "0"], "--start"),
+        (["--start", "3.5", "8.05", "0", "--goal", "12", "8.05"], "--goal"),
+        (["--start", "3.5", "8.05", "0", "--goal", "12", "8.05", "0", "--robot", "nope"], "robot"),
+        (["--start", "3.5", "8.05", "0", "--goal", "12", "8.05", "0", "--time-limit", "-1"], "--time-limit"),
+        (["--start", "3.5", "8.05", "0", "--goal", "12", "8.05", "0", "--options", "{\"n_rolls\": 2}"], "n_rolls"),
+        (["--start", "-50", "8.05", "0", "--goal", "12", "8.05", "0"], "start"),
+        (["--start", "3.5", "8.05", "0", "--goal", "0.05", "0.05", "0"], "goal"),
+    ],
+)
+def test_bad_input_exits_2_naming_the_field(capsys, argv, field):
+    code, _, err = run(capsys, "plan", "--map", GARAGE, *argv) if "--map" not in argv else (None, "", "")
+    assert code == 2
+    assert field in err
+    assert "Traceback" not in err
+
+
+def test_missing_map_and_bad_map(capsys, tmp_path):
+    code, _, err = run(capsys, "plan", "--map", str(tmp_path / "none.yaml"), "--start", "1", "1", "0",
+                       "--goal", "2", "2", "0")
+    assert code == 2 and "map" in err
+    bad = tmp_path / "bad.yaml"
+    bad.write_text("image: x.pgm\nresolution: -1\norigin: [0, 0, 0]\n")
+    code, _, err = run(capsys, "plan", "--map", str(bad), "--start", "1", "1", "0", "--goal", "2", "2", "0")
+    assert code == 2 and "resolution" in err
+
+
+def test_no_path_exits_3_and_timeout_exits_4(capsys):
+    code, out, err = run(capsys, "plan", "--map", GARAGE, "--start", "20", "23.55", "0", "--goal", "12.5", "28.3", "0")
+    assert code == 3 and json.loads(out)["error_code"] == 208 and "no path" in err
+    code, out, _ = run(capsys, "plan", "--map", GARAGE, "--start", "12", "8.05", "0", "--goal", "12", "23.55", "3.1416",
+                       "--time-limit", "0.001", "--options", "{\"greed\": 0.0, \"chunk_expansions\": 10}")
+    assert code == 4 and json.loads(out)["error_code"] == 207
