@@ -31,18 +31,19 @@ from collections import OrderedDict
 from collections.abc import Callable
 from concurrent.futures import Executor, Future, ProcessPoolExecutor
 from concurrent.futures.process import BrokenProcessPool
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any, Literal
 
 import numpy as np
 
 from planner.errors import InvalidInput, NotFound, PlanningError, SpherePlanError
+from planner.mapio import default_maps_dir, list_maps
 from planner.occupancy import OccupancyGrid
 from planner.result import failure_json
-from planner.robot import builtin_robots, load_robot
+from planner.robot import DEFAULT_ROBOT, builtin_robots, load_robot
 from planner.search import PlannerOptions
-from service.wire import MAX_INLINE_CELLS, MAX_TIME_LIMIT_S, PlanRequest
+from service.wire import MAX_INLINE_CELLS, MAX_TIME_LIMIT_S, PlanRequest, SimulateRequest, TensegrityStaticRequest
 
 log = logging.getLogger(__name__)
 
@@ -54,21 +55,16 @@ MESH_SUFFIXES = (".stl", ".obj", ".ply")
 Kind = Literal["ok", "bad_input", "not_found", "failed", "busy", "internal"]
 
 
-def default_maps_dir() -> Path:
-    """``$SPHEREPLAN_MAPS``, else the ``maps`` folder of the source checkout."""
-    env = os.environ.get("SPHEREPLAN_MAPS")
-    return Path(env) if env else Path(__file__).resolve().parent.parent / "maps"
-
-
 @dataclass(frozen=True)
 class ServiceSettings:
     """Everything the service, the HTTP app and the Zenoh node are configured with, validated once.
 
+    ``maps_dir`` None means the shipped maps (:func:`planner.mapio.default_maps_dir`).
     ``max_in_flight`` 0 means 4 jobs per worker. ``zenoh_listen`` is the default peer's only endpoint
     (ignored when ``zenoh_config`` names a Zenoh config file). ``max_body_bytes`` bounds HTTP bodies.
     """
 
-    maps_dir: Path = field(default_factory=default_maps_dir)
+    maps_dir: Path | None = None
     workers: int = 2
     max_in_flight: int = 0
     max_time_limit_s: float = MAX_TIME_LIMIT_S
@@ -282,6 +278,41 @@ def plan_job(request: dict[str, Any], map_path: str | None) -> Outcome:
         return outcome_of_exception(exc)
 
 
+def simulate_job(request: dict[str, Any], map_path: str | None, robot_name: str) -> Outcome:
+    """Run one simulate request in a worker: ``simulate_plan`` with the options of ``sphereplan simulate``."""
+    from planner.simulate import SimulationOptions, simulate_plan
+    from planner.tracker import MPCParams
+
+    try:
+        grid = load_map_file(Path(map_path), None) if map_path is not None else inline_grid(request["map"])
+        options = SimulationOptions(control_rate_hz=request["rate_hz"], tracker=request["tracker"],
+                                    mpc=MPCParams(horizon=request["horizon"]), time_limit_s=request["time_limit_s"])
+        result = simulate_plan(grid, request["path"], load_robot(robot_name), seed=request["seed"],
+                               noise=request["noise"], options=options)
+        return Outcome("ok", _dumps(result))
+    except SpherePlanError as exc:
+        return outcome_of_exception(exc)
+    except Exception as exc:
+        log.exception("simulate job failed")
+        return outcome_of_exception(exc)
+
+
+def tensegrity_static_job(request: dict[str, Any]) -> Outcome:
+    """Run ``static_equilibria`` in a worker (what ``sphereplan tensegrity static`` prints)."""
+    from planner.tensegrity import static_equilibria
+
+    try:
+        to_rad = math.radians if request["degrees"] else float
+        result = static_equilibria(to_rad(request["theta1"]), to_rad(request["theta2"]), load_robot(request["robot"]),
+                                   request["verify"])
+        return Outcome("ok", _dumps(result))
+    except SpherePlanError as exc:
+        return outcome_of_exception(exc)
+    except Exception as exc:
+        log.exception("tensegrity job failed")
+        return outcome_of_exception(exc)
+
+
 # ------------------------------------------------------------------------------------------ service
 
 
@@ -296,6 +327,7 @@ class PlanningService:
     def __init__(self, settings: ServiceSettings | None = None,
                  executor_factory: Callable[[int], Executor] | None = None) -> None:
         self.settings = settings or ServiceSettings()
+        self.maps_dir = Path(self.settings.maps_dir) if self.settings.maps_dir else default_maps_dir()
         self._executor_factory = executor_factory or self._process_pool
         self._executor: Executor | None = None
         self._lock = threading.Lock()
@@ -394,7 +426,7 @@ class PlanningService:
 
     def resolve_map(self, name: str) -> Path:
         """The file of map ``name`` in the maps folder, or :class:`NotFound`."""
-        index = map_index(self.settings.maps_dir)
+        index = map_index(self.maps_dir)
         path = index.get(name)
         if path is None:
             shown = ", ".join(sorted(index)) or "none"
@@ -418,15 +450,33 @@ class PlanningService:
         options_limit = (request.options or {}).get("time_limit_s")
         if isinstance(options_limit, int | float) and options_limit > self.settings.max_time_limit_s:
             raise InvalidInput("options.time_limit_s", f"must be ≤ {self.settings.max_time_limit_s:g} s on this server")
-        map_path: str | None = None
-        if isinstance(request.map, str):
-            map_path = str(self.resolve_map(request.map))
-        else:
-            cells = len(request.map.data) * len(request.map.data[0])
-            if cells > self.settings.max_inline_cells:
-                raise InvalidInput("map.data", f"{cells} cells; this server accepts at most "
-                                               f"{self.settings.max_inline_cells}")
-        return self._submit(plan_job, request.request_json(), map_path)
+        return self._submit(plan_job, request.request_json(), self._map_argument(request.map))
+
+    def _map_argument(self, map_spec: str | Any) -> str | None:
+        """The file of a named map (checked now), or None for an inline grid (size checked now)."""
+        if isinstance(map_spec, str):
+            return str(self.resolve_map(map_spec))
+        cells = len(map_spec.data) * len(map_spec.data[0])
+        if cells > self.settings.max_inline_cells:
+            limit = self.settings.max_inline_cells
+            raise InvalidInput("map.data", f"{cells} cells; this server accepts at most {limit}")
+        return None
+
+    def submit_simulate(self, request: SimulateRequest) -> Future[Outcome]:
+        """Queue a closed-loop simulation of ``request.path`` (robot: the request's, else the plan's)."""
+        robot = request.robot
+        if robot is None:
+            robot = request.path.robot.name if request.path.robot is not None else DEFAULT_ROBOT
+            if robot not in builtin_robots():
+                raise NotFound("path.robot.name", f"the plan's robot {robot!r} is not a built-in profile; "
+                                                  f"give robot (one of {', '.join(builtin_robots())})")
+        self.resolve_robot(robot)
+        return self._submit(simulate_job, request.request_json(), self._map_argument(request.map), robot)
+
+    def submit_tensegrity_static(self, request: TensegrityStaticRequest) -> Future[Outcome]:
+        """Queue the TeXploR static-state computation."""
+        self.resolve_robot(request.robot)
+        return self._submit(tensegrity_static_job, request.request_json())
 
     def plan(self, request: PlanRequest, timeout_s: float | None = None) -> Outcome:
         """Blocking plan: the :class:`Outcome`, with request errors and busy mapped to outcomes too."""
@@ -438,9 +488,10 @@ class PlanningService:
             return outcome_of_exception(exc)
 
     def maps(self) -> list[dict[str, Any]]:
-        """Name, file and kind of every map in the maps folder."""
-        return [{"name": name, "file": path.name, "kind": "mesh" if path.suffix.lower() in MESH_SUFFIXES else "grid"}
-                for name, path in sorted(map_index(self.settings.maps_dir).items())]
+        """Every map a request may name (:func:`planner.mapio.list_maps` entries: name, file, kind, size_m,
+        resolution_m); where a grid YAML and a mesh share a name, the YAML is the one served."""
+        index = map_index(self.maps_dir)
+        return [entry for entry in list_maps(self.maps_dir) if index.get(entry["name"], Path()).name == entry["file"]]
 
     def map_grid(self, name: str) -> OccupancyGrid:
         return load_map_file(self.resolve_map(name), None)

@@ -42,6 +42,8 @@ from service.wire import (
     PlanRequest,
     PlanResultOut,
     RobotInfo,
+    SimulateRequest,
+    TensegrityStaticRequest,
     describe_errors,
 )
 
@@ -159,6 +161,29 @@ async def post_plan(body: PlanRequest, service: Service) -> Response:
     return outcome_response(await asyncio.wrap_future(future), service.settings.retry_after_s)
 
 
+simulate = APIRouter(prefix="/v1", tags=["simulate"])
+
+
+@simulate.post("/simulate", responses=ERRORS)
+async def post_simulate(body: SimulateRequest, service: Service) -> Response:
+    """Roll a plan (the result of ``/v1/plan``) in closed loop on a map: simulator, odometry/GNSS fusion
+    and the MPC tracker of paper 001. Answers the SIM.json object ``sphereplan simulate`` writes
+    (``trajectory``, ``estimate``, ``odometry``, ``gnss``, ``commands``, ``metrics``)."""
+    future = await asyncio.to_thread(service.submit_simulate, body)
+    return outcome_response(await asyncio.wrap_future(future), service.settings.retry_after_s)
+
+
+tensegrity = APIRouter(prefix="/v1/tensegrity", tags=["tensegrity"])
+
+
+@tensegrity.post("/static", responses=ERRORS)
+async def post_tensegrity_static(body: TensegrityStaticRequest, service: Service) -> Response:
+    """The four hybrid static states of the TeXploR two-arc robot (paper 002) for slider angles θ1, θ2:
+    what ``sphereplan tensegrity static`` prints."""
+    future = await asyncio.to_thread(service.submit_tensegrity_static, body)
+    return outcome_response(await asyncio.wrap_future(future), service.settings.retry_after_s)
+
+
 maps = APIRouter(prefix="/v1", tags=["maps"])
 
 
@@ -265,6 +290,8 @@ def create_app(settings: ServiceSettings | None = None, service: PlanningService
     app.state.service = svc
     app.include_router(health)
     app.include_router(plan)
+    app.include_router(simulate)
+    app.include_router(tensegrity)
     app.include_router(maps)
     app.include_router(robots)
     install_error_handlers(app)

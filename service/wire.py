@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import re
 from collections.abc import Sequence
-from typing import Annotated, Any
+from typing import Annotated, Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 
@@ -22,6 +22,11 @@ from pydantic import BaseModel, ConfigDict, Field, model_validator
 MAX_INLINE_CELLS = 250_000
 #: largest time limit a request may ask for (s); a server may set a lower one
 MAX_TIME_LIMIT_S = 60.0
+
+#: longest plan ``/v1/simulate`` accepts (states; 20 000 × 4 cm = 800 m)
+MAX_PLAN_STATES = 20_000
+#: longest simulated time ``/v1/simulate`` accepts (s)
+MAX_SIM_TIME_S = 3600.0
 
 NAME_PATTERN = r"^[A-Za-z0-9_-][A-Za-z0-9_.-]{0,63}$"
 
@@ -95,6 +100,68 @@ class GoalMessage(_Strict):
     def plan_request(self, start: PoseIn) -> PlanRequest:
         return PlanRequest(map=self.map, start=start, goal=self.goal, robot=self.robot,
                            time_limit_s=self.time_limit_s, options=self.options)
+
+
+class StateIn(_Strict):
+    """One row of a plan's ``states`` (DESIGN.md): SI units, radians."""
+
+    x: float
+    y: float
+    yaw: float
+    roll: float
+    v: float
+    t: float
+    s: float
+    curvature: float
+
+
+class RobotRef(BaseModel):
+    model_config = ConfigDict(extra="allow", strict=True)
+
+    name: Name
+
+
+class PlanIn(BaseModel):
+    """A plan result as ``/v1/plan`` returns it; only ``states`` (and ``robot.name``) are read, other keys
+    are accepted and ignored."""
+
+    model_config = ConfigDict(extra="allow", strict=True, allow_inf_nan=False)
+
+    states: list[StateIn] = Field(min_length=2, max_length=MAX_PLAN_STATES)
+    robot: RobotRef | None = None
+
+
+class SimulateRequest(_Strict):
+    """``POST /v1/simulate`` and the ``sphereplan/simulate`` query: roll ``path`` (a plan result) in
+    closed loop on ``map``, as ``sphereplan simulate --map M --path PLAN.json`` does."""
+
+    map: Name | InlineGrid
+    path: PlanIn
+    robot: Name | None = Field(default=None, description="default: the plan's robot")
+    seed: int = Field(default=0, ge=0, le=2**32 - 1, description="seeds every disturbance")
+    noise: Literal["none", "default"] = "default"
+    tracker: Literal["mpc", "pursuit"] = "mpc"
+    rate_hz: float = Field(default=50.0, gt=0, le=1000, description="control rate")
+    horizon: int = Field(default=15, ge=1, le=100, description="MPC horizon (steps)")
+    time_limit_s: float | None = Field(default=None, gt=0, le=MAX_SIM_TIME_S,
+                                       description="simulated seconds (default 2 × rolling time + 20 s)")
+
+    def request_json(self) -> dict[str, Any]:
+        return self.model_dump(mode="json")
+
+
+class TensegrityStaticRequest(_Strict):
+    """``POST /v1/tensegrity/static``: the four hybrid static states of TeXploR for slider angles θ1, θ2
+    (as ``sphereplan tensegrity static``)."""
+
+    theta1: float = Field(description="slider 1 angle (rad, or degrees with degrees=true)")
+    theta2: float = Field(description="slider 2 angle (rad, or degrees with degrees=true)")
+    degrees: bool = False
+    verify: bool = Field(default=True, description="cross-check with a potential-energy minimisation")
+    robot: Name = "texplor"
+
+    def request_json(self) -> dict[str, Any]:
+        return self.model_dump(mode="json")
 
 
 # ------------------------------------------------------------------------------------ response documentation

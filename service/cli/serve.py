@@ -10,14 +10,17 @@ from __future__ import annotations
 import argparse
 import logging
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from planner.errors import InvalidInput
-from service.core import ServiceSettings, default_maps_dir
-from service.wire import MAX_TIME_LIMIT_S
+
+if TYPE_CHECKING:
+    from service.core import ServiceSettings
 
 VERB = "serve"
 HELP = "serve planning over HTTP (FastAPI) and Zenoh from one process"
 GRACEFUL_SHUTDOWN_S = 2
+MAX_TIME_LIMIT_S = 60.0  # service.wire.MAX_TIME_LIMIT_S (not imported: ``sphereplan --help`` stays light)
 
 
 def _port(text: str) -> int:
@@ -58,6 +61,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def settings_from_args(args: argparse.Namespace) -> ServiceSettings:
+    from planner.mapio import default_maps_dir
+    from service.core import ServiceSettings
+
     maps_dir = Path(args.maps) if args.maps else default_maps_dir()
     if not maps_dir.is_dir():
         raise InvalidInput("--maps", f"{maps_dir} is not a directory")

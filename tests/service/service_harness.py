@@ -17,6 +17,7 @@ import tempfile
 import time
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import httpx
 import numpy as np
@@ -63,6 +64,12 @@ def plan_body(start: tuple[float, float, float] = HALL_START, goal: tuple[float,
 def strip_timing(result: dict[str, object]) -> dict[str, object]:
     """A result without its ``*_time_s`` wall-clock timings (all that differs between identical runs)."""
     return {k: v for k, v in result.items() if not k.endswith("_time_s")}
+
+
+def strip_sim_timing(sim: dict[str, Any]) -> dict[str, Any]:
+    """A SIM.json without the solver's wall-clock step times."""
+    metrics = {k: v for k, v in sim["metrics"].items() if "_ms" not in k}
+    return {**sim, "metrics": metrics}
 
 
 @dataclass

@@ -30,10 +30,16 @@ def test_bad_arguments_exit_2_naming_the_field(tmp_path: Path, capsys: pytest.Ca
     assert field in capsys.readouterr().err
 
 
-def test_bad_port_is_an_argparse_error() -> None:
-    with pytest.raises(SystemExit) as exit_:
-        cli_main(["serve", "--port", "70000"])
-    assert exit_.value.code == 2
+def test_bad_port_is_an_argparse_error(capsys: pytest.CaptureFixture[str]) -> None:
+    assert cli_main(["serve", "--port", "70000"]) == 2
+    assert "--port" in capsys.readouterr().err
+
+
+def test_default_time_limit_cap_matches_the_wire_models() -> None:
+    from service.cli.serve import MAX_TIME_LIMIT_S
+    from service.wire import MAX_TIME_LIMIT_S as WIRE_MAX
+
+    assert MAX_TIME_LIMIT_S == WIRE_MAX
 
 
 def test_ctrl_c_stops_the_server_while_a_plan_runs(tmp_path: Path) -> None:

@@ -26,7 +26,15 @@ from schemathesis.specs.openapi.checks import (
 
 from service.cli import main as cli_main
 from tests.service import service_harness as harness
-from tests.service.service_harness import HALL_GOAL, HALL_START, SLOT_GOAL, Server, plan_body, strip_timing
+from tests.service.service_harness import (
+    HALL_GOAL,
+    HALL_START,
+    SLOT_GOAL,
+    Server,
+    plan_body,
+    strip_sim_timing,
+    strip_timing,
+)
 
 
 @pytest.fixture(scope="session")
@@ -93,6 +101,50 @@ def test_inline_grid_plans_like_the_named_map(client: httpx.Client) -> None:
     sent = client.post("/v1/plan", json={**plan_body(), "map": inline})
     assert named.status_code == sent.status_code == 200, sent.text
     assert strip_timing(named.json()) == strip_timing(sent.json())
+
+
+def test_simulate_equals_cli(client: httpx.Client, server: Server, tmp_path: Path) -> None:
+    plan = client.post("/v1/plan", json=plan_body()).json()
+    response = client.post("/v1/simulate", json={"map": "hall", "path": plan, "seed": 3})
+    assert response.status_code == 200, response.text
+    sim = response.json()
+    assert sim["metrics"]["reached_goal"] and not sim["metrics"]["collided"]
+    (tmp_path / "plan.json").write_text(json.dumps(plan))
+    out = tmp_path / "sim.json"
+    assert cli_main(["simulate", "--map", str(server.maps_dir / "hall.yaml"), "--path", str(tmp_path / "plan.json"),
+                     "--seed", "3", "--out", str(out)]) == 0
+    assert strip_sim_timing(sim) == strip_sim_timing(json.loads(out.read_text()))
+
+
+def test_bad_simulate_requests(client: httpx.Client) -> None:
+    plan = client.post("/v1/plan", json=plan_body()).json()
+    cases: list[tuple[dict[str, Any], int, str]] = [
+        ({"map": "hall", "path": {**plan, "states": plan["states"][:1]}}, 422, "path.states"),
+        ({"map": "hall", "path": {**plan, "robot": {"name": "../robots/x"}}}, 422, "path.robot.name"),
+        ({"map": "hall", "path": {**plan, "robot": {"name": "wheelie"}}}, 404, "path.robot.name"),
+        ({"map": "hall", "path": plan, "tracker": "lqr"}, 422, "tracker"),
+        ({"map": "hall", "path": plan, "seed": -1}, 422, "seed"),
+        ({"map": "nowhere", "path": plan}, 404, "map"),
+    ]
+    for body, status, field in cases:
+        response = client.post("/v1/simulate", json=body)
+        assert response.status_code == status, (field, response.text)
+        assert response.json()["field"] == field
+    nan = json.dumps({"map": "hall", "path": plan}).replace(str(plan["states"][3]["x"]), "NaN", 1)
+    response = client.post("/v1/simulate", content=nan, headers={"content-type": "application/json"})
+    assert response.status_code == 422 and response.json()["field"] == "path.states[3].x"
+
+
+def test_tensegrity_static_equals_cli(client: httpx.Client, tmp_path: Path) -> None:
+    response = client.post("/v1/tensegrity/static", json={"theta1": 30, "theta2": 60, "degrees": True})
+    assert response.status_code == 200, response.text
+    out = tmp_path / "static.json"
+    assert cli_main(["tensegrity", "static", "--theta1", "30", "--theta2", "60", "--degrees", "--out", str(out)]) == 0
+    assert response.json() == json.loads(out.read_text())
+    bad = client.post("/v1/tensegrity/static", json={"theta1": "30", "theta2": 60})
+    assert bad.status_code == 422 and bad.json()["field"] == "theta1"
+    unknown = client.post("/v1/tensegrity/static", json={"theta1": 0.1, "theta2": 0.2, "robot": "nobody"})
+    assert unknown.status_code == 404
 
 
 def _huge_grid() -> dict[str, Any]:

@@ -78,7 +78,8 @@ def test_map_names_only_reach_maps_in_the_folder(maps_dir: Path) -> None:
         assert err.value.field == "map"
     with pytest.raises(ValidationError):
         PlanRequest.model_validate({**plan_body(), "map": "../maps/hall"})
-    assert service.maps() == [{"name": "hall", "file": "hall.yaml", "kind": "grid"}]
+    assert service.maps() == [{"name": "hall", "file": "hall.yaml", "kind": "grid", "size_m": [10.0, 8.0],
+                               "resolution_m": 0.1}]
 
 
 def test_robot_names_are_built_in_profiles_only(maps_dir: Path) -> None:

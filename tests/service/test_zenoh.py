@@ -14,7 +14,15 @@ import pytest
 
 from service.cli import main as cli_main
 from tests.service import service_harness as harness
-from tests.service.service_harness import HALL_GOAL, HALL_START, SLOT_GOAL, Server, plan_body, strip_timing
+from tests.service.service_harness import (
+    HALL_GOAL,
+    HALL_START,
+    SLOT_GOAL,
+    Server,
+    plan_body,
+    strip_sim_timing,
+    strip_timing,
+)
 
 CLIENT = Path(__file__).with_name("zenoh_client.py")
 
@@ -99,6 +107,18 @@ def test_slow_query_does_not_block_a_fast_one(query_answers: list[dict[str, Any]
 def test_liveliness_token_announces_the_planner(query_answers: list[dict[str, Any]]) -> None:
     tokens = query_answers[8]["tokens"]
     assert len(tokens) == 1 and tokens[0].startswith("sphereplan/planner/")
+
+
+def test_simulate_query_equals_http(server: Server) -> None:
+    plan = httpx.post(server.url + "/v1/plan", json=plan_body(), timeout=60).json()
+    request = {"map": "hall", "path": plan, "tracker": "pursuit", "noise": "none"}
+    answers = zenoh_steps(server, [{"query": "sphereplan/simulate", "payload": request},
+                                   {"query": "sphereplan/simulate", "payload": {**request, "tracker": "lqr"}}])
+    reply, bad = only_reply(answers[0]), only_reply(answers[1])
+    assert reply["ok"] and reply["payload"]["metrics"]["reached_goal"]
+    http = httpx.post(server.url + "/v1/simulate", json=request, timeout=60).json()
+    assert strip_sim_timing(reply["payload"]) == strip_sim_timing(http)
+    assert not bad["ok"] and bad["payload"]["field"] == "tracker"
 
 
 def test_goal_and_pose_topics_plan_and_publish(server: Server) -> None:
