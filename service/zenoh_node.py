@@ -7,8 +7,9 @@ Key expressions (payloads are the same JSON as the HTTP API, encoding ``applicat
   the callback only validates and submits, the reply is sent when the job finishes, so a slow plan
   never blocks other queries. Every query is finalised (``drop``) once answered.
 * queryable ``sphereplan/simulate`` — payload a :class:`~service.wire.SimulateRequest`, replies SIM.json.
-* subscribers ``sphereplan/*/pose`` (a :class:`~service.wire.PoseIn`) and ``sphereplan/*/goal`` (a
-  :class:`~service.wire.GoalMessage`): each new goal is planned from that robot's latest pose; the
+* ``sphereplan/*/pose`` (a :class:`~service.wire.PoseIn`) and ``sphereplan/*/goal`` (a
+  :class:`~service.wire.GoalMessage`), taken by one subscriber so that a pose published just before a
+  goal is always applied first: each new goal is planned from that robot's latest pose; the
   service publishes the plan result on ``sphereplan/<robot_id>/path`` and ``{robot_id, goal_id, state,
   error_code, error_msg, ...}`` on ``sphereplan/<robot_id>/status`` (``planning``, then ``succeeded``
   or ``failed``). A goal superseded by a newer one before its plan finished publishes nothing more.
@@ -109,8 +110,10 @@ class ZenohNode:
         for name, (model, submit) in self.queryables.items():
             key = f"{PREFIX}/{name}"
             self._entities.append(session.declare_queryable(key, self._query_handler(key, model, submit)))
-        self._entities.append(session.declare_subscriber(f"{PREFIX}/*/pose", self._on_pose))
-        self._entities.append(session.declare_subscriber(f"{PREFIX}/*/goal", self._on_goal))
+        # one subscriber for both topics, so that a pose published just before a goal is seen first
+        # (callbacks of separate subscribers run on separate threads); our own puts are not delivered
+        self._entities.append(session.declare_subscriber(f"{PREFIX}/*/*", self._on_robot_sample,
+                                                         allowed_origin=zenoh.Locality.REMOTE))
         self._entities.append(session.liveliness().declare_token(f"{PREFIX}/planner/{session.zid()}"))
         log.info("zenoh node %s up: queryables %s", session.zid(), ", ".join(self.queryables))
 
@@ -190,6 +193,13 @@ class ZenohNode:
             status.update(error_code=body.get("error_code", 200), error_msg=body.get("error_msg", ""))
         status.update(extra)
         self._publish(robot_id, "status", status)
+
+    def _on_robot_sample(self, sample: zenoh.Sample) -> None:
+        topic = str(sample.key_expr).rsplit("/", 1)[-1]
+        if topic == "pose":
+            self._on_pose(sample)
+        elif topic == "goal":
+            self._on_goal(sample)
 
     def _on_pose(self, sample: zenoh.Sample) -> None:
         robot_id = self._robot_id(sample)

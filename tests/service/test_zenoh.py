@@ -131,8 +131,7 @@ def test_goal_and_pose_topics_plan_and_publish(server: Server) -> None:
         {"put": "sphereplan/r1/pose", "payload": {"x": 2.0, "y": "two", "yaw": 0.0}},  # bad pose
         {"wait": "/status", "until": {"state": "invalid_pose"}, "timeout_s": 10},
         {"put": "sphereplan/r1/pose", "payload": dict(zip(("x", "y", "yaw"), HALL_START, strict=True))},
-        {"sleep": 0.3},
-        {"put": "sphereplan/r1/goal", "payload": goal_msg},
+        {"put": "sphereplan/r1/goal", "payload": goal_msg},  # right after the pose: the pose must be used
         {"wait": "/status", "until": {"goal_id": 2, "state": "succeeded"}, "timeout_s": 60},
     ])
     samples = answers[-1]["samples"]
