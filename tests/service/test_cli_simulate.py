@@ -3,13 +3,12 @@
 from __future__ import annotations
 
 import json
-import sys
-import types
 from pathlib import Path
 
 import numpy as np
 import pytest
 
+from planner.mapio import save_map
 from planner.occupancy import OccupancyGrid
 from planner.robot import load_robot
 from planner.synthetic_paths import s_curve_plan
@@ -30,13 +29,10 @@ KEYS = {
 
 
 @pytest.fixture
-def field_map(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> str:
-    """A map file name served by a stand-in ``planner.mapio.load_map`` (an open 8 m × 6 m field)."""
+def field_map(tmp_path: Path) -> str:
+    """A real map file (ROS YAML + PGM) of an open 8 m × 6 m field."""
     grid = OccupancyGrid.from_occupied(np.zeros((120, 160), dtype=bool), 0.05, (-2.0, -2.0, 0.0))
-    fake = types.ModuleType("planner.mapio")
-    fake.load_map = lambda path: grid  # type: ignore[attr-defined]
-    monkeypatch.setitem(sys.modules, "planner.mapio", fake)
-    return str(tmp_path / "field.yaml")
+    return str(save_map(grid, tmp_path / "field.yaml"))
 
 
 @pytest.fixture
@@ -109,6 +105,4 @@ def test_bad_input_exits_2_naming_the_field(
 
 def test_argparse_rejects_bad_noise_and_seed() -> None:
     for argv in (["--noise", "loud"], ["--seed", "-1"], ["--rate", "0"]):
-        with pytest.raises(SystemExit) as exc:
-            main(["simulate", "--track", *argv])
-        assert exc.value.code == 2
+        assert main(["simulate", "--track", *argv]) == 2

@@ -1,0 +1,397 @@
+"""The curvature cascade: a planned path → desired roll and speed → VPIP angles → 16 rod lengths.
+
+Paper 000 §5 ends with the cascade this module runs ("control the desired φ_r of the robot over a
+desired curve radius"): at every control tick (100 Hz)
+
+1. the path's curvature (plus a small path-tracking correction) gives the desired turning radius and,
+   through the profile's :class:`~planner.robot.RollModel`, the desired roll (rate-limited to the
+   profile's roll rate);
+2. the plan's time parametrisation gives the desired speed, ω = v / r_m;
+3. the roll PID gives φ_VPIP, the pitch PI gives θ_VPIP (:mod:`planner.vpip.controllers`);
+4. the rod driver turns them into the 16 rod lengths (eq. 18, :mod:`planner.vpip.rods`), each
+   rate-limited to the rod speed — or the §2 baseline (:mod:`planner.vpip.simple`) does.
+
+**The plant is a surrogate, not the rod physics.** The robot's rotational speed follows θ_VPIP
+through a first-order lag with a rate limit: ``ω → G_ω · θ_VPIP`` (time constant
+``plant_omega_tau_s`` = 0.5 s, ω̇ ≤ ``max_accel / r_m``). The roll follows φ_VPIP through a damped
+*second-order* lag with a rate limit: ``φ̈ = ω_n²(−G_φ · φ_VPIP − φ) − 2ζω_n φ̇``, ``|φ̇| ≤ max_roll_rate``
+(ω_n = 2 rad/s, ζ = 0.7). A first-order lag is not used for roll because Table 1's roll PID has a
+large derivative (k_d/k_p ≈ 1.2 s, tuned on an inertial plant): against any first-order lag fast
+enough to matter the derivative feed-through makes the 100 Hz loop chatter between ±20°, and a lag slow
+enough to be stable (G_φ/τ ≲ 0.4 1/s) cannot hold 15° roll within the 5° integral limit.
+G_φ = 3 (roll per rad of φ_VPIP; G_φ ≥ 3 lets the 5° integral part hold the 15° table roll with no
+steady error) and G_ω = 3 rad/s per rad (ω = 1 rad/s of paper §5 at θ_VPIP ≈ 19°, inside the 10°–30°
+band of paper Fig. 7) are assumptions; ``[vpip]`` keys ``plant_roll_gain``, ``plant_roll_natural_rad_s``,
+``plant_roll_damping``, ``plant_omega_gain``, ``plant_omega_tau_s`` override them. The simple driver
+has no plane, so its rod targets (before the rod-speed limit, as the VPIP driver's plane is) are
+mapped to the plane angles that best reproduce them (:func:`rods.equivalent_plane`) and those drive
+the same plant. The sphere then moves by paper 001 eq. 1 with the profile's roll model:
+``ẋ = v cos ψ − r φ̇ sin ψ``, ``ẏ = v sin ψ + r φ̇ cos ψ``, ``ψ̇ = v·κ(φ)``.
+
+Reverse motion (negative ``v`` in the plan) is not supported.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from planner.errors import InvalidInput, RobotProfileError
+from planner.robot import RobotProfile
+from planner.vpip.controllers import PitchController, RollController, gains_from_section
+from planner.vpip.rods import RodDriver, RodParams, equivalent_plane
+from planner.vpip.simple import SimpleDriver
+
+DRIVERS = ("vpip", "simple")
+
+SURROGATE_NOTE = (
+    "surrogate plant, not the rod/contact physics: rotational speed follows theta_vpip through a "
+    "first-order lag, roll follows phi_vpip through a damped second-order lag, both rate-limited"
+)
+
+
+def vpip_section(profile: RobotProfile) -> Mapping[str, Any]:
+    """The profile's ``[vpip]`` table; a profile without one cannot drive rods."""
+    section = profile.extra.get("vpip")
+    if not isinstance(section, Mapping):
+        raise InvalidInput(
+            "robot", f"profile {profile.name!r} has no [vpip] section (rod-driven robots only)"
+        )
+    return section
+
+
+def rod_params(profile: RobotProfile) -> RodParams:
+    return RodParams.from_section(vpip_section(profile))
+
+
+@dataclass(frozen=True)
+class PlantParams:
+    """Surrogate plant (see module doc). Gains: roll (rad per rad of φ_VPIP), ω (rad/s per rad of θ_VPIP)."""
+
+    roll_gain: float
+    roll_natural_rad_s: float
+    roll_damping: float
+    roll_rate_rad_s: float
+    omega_gain: float
+    omega_tau_s: float
+    omega_accel_rad_s2: float
+
+    @classmethod
+    def from_profile(cls, profile: RobotProfile, params: RodParams) -> PlantParams:
+        section = vpip_section(profile)
+
+        def num(key: str, default: float) -> float:
+            value = section.get(key, default)
+            if isinstance(value, bool) or not isinstance(value, int | float) or not 0 < float(value) < 1e6:
+                raise RobotProfileError(f"vpip.{key}", f"must be a number > 0, got {value!r}")
+            return float(value)
+
+        return cls(
+            roll_gain=num("plant_roll_gain", 3.0),
+            roll_natural_rad_s=num("plant_roll_natural_rad_s", 2.0),
+            roll_damping=num("plant_roll_damping", 0.7),
+            roll_rate_rad_s=profile.max_roll_rate_rad_s,
+            omega_gain=num("plant_omega_gain", 3.0),
+            omega_tau_s=num("plant_omega_tau_s", 0.5),
+            omega_accel_rad_s2=profile.max_accel_m_s2 / params.r_m,
+        )
+
+
+def _lag(value: float, target: float, tau_s: float, rate: float, dt_s: float) -> float:
+    """One step of a first-order lag toward ``target`` whose rate is limited to ``rate``."""
+    change = (target - value) * (1.0 - math.exp(-dt_s / tau_s))
+    return value + max(-rate * dt_s, min(rate * dt_s, change))
+
+
+class SurrogatePlant:
+    """Roll (rad, > 0 left) and rotational speed ω (rad/s) responding to the VPIP angles; a surrogate."""
+
+    def __init__(self, p: PlantParams, roll_rad: float = 0.0, omega_rad_s: float = 0.0) -> None:
+        self.p = p
+        self.roll_rad = roll_rad
+        self.roll_rate_rad_s = 0.0
+        self.omega_rad_s = omega_rad_s
+
+    def step(self, phi_vpip_rad: float, theta_vpip_rad: float, dt_s: float) -> None:
+        p = self.p
+        wn = p.roll_natural_rad_s
+        acc = (
+            wn * wn * (-p.roll_gain * phi_vpip_rad - self.roll_rad)
+            - 2.0 * p.roll_damping * wn * self.roll_rate_rad_s
+        )
+        rate = self.roll_rate_rad_s + acc * dt_s
+        self.roll_rate_rad_s = max(-p.roll_rate_rad_s, min(p.roll_rate_rad_s, rate))
+        self.roll_rad += self.roll_rate_rad_s * dt_s
+        self.omega_rad_s = _lag(
+            self.omega_rad_s, p.omega_gain * theta_vpip_rad, p.omega_tau_s, p.omega_accel_rad_s2, dt_s
+        )
+
+
+def _field(states: Sequence[Any], key: str, required: bool) -> np.ndarray | None:
+    values = []
+    for i, st in enumerate(states):
+        if not isinstance(st, Mapping):
+            raise InvalidInput(f"path.states[{i}]", "must be an object")
+        if key not in st or st[key] is None:
+            if required:
+                raise InvalidInput(f"path.states[{i}].{key}", "is required")
+            return None
+        v = st[key]
+        if isinstance(v, bool) or not isinstance(v, int | float) or not math.isfinite(float(v)):
+            raise InvalidInput(f"path.states[{i}].{key}", f"must be a finite number, got {v!r}")
+        values.append(float(v))
+    return np.asarray(values)
+
+
+@dataclass(frozen=True)
+class PathReference:
+    """The planned path as arrays over arc length ``s`` (m): pose, curvature (1/m), time (s), speed (m/s)."""
+
+    s: np.ndarray
+    x: np.ndarray
+    y: np.ndarray
+    yaw: np.ndarray
+    curvature: np.ndarray
+    t: np.ndarray
+    v: np.ndarray
+
+    @classmethod
+    def from_plan(cls, plan: Mapping[str, Any], profile: RobotProfile) -> PathReference:
+        """Read a planner result (DESIGN.md: ``states`` [{x, y, yaw, roll, v, t, s, curvature}])."""
+        if not isinstance(plan, Mapping):
+            raise InvalidInput("path", "must be a JSON object with 'states'")
+        states = plan.get("states")
+        if not isinstance(states, list) or len(states) < 2:
+            raise InvalidInput("path.states", "must be a list of at least two states")
+        x = _field(states, "x", True)
+        y = _field(states, "y", True)
+        yaw = _field(states, "yaw", True)
+        assert x is not None and y is not None and yaw is not None
+        yaw = np.unwrap(yaw)
+        seg = np.hypot(np.diff(x), np.diff(y))
+        s = _field(states, "s", False)
+        if s is None:
+            s = np.concatenate([[0.0], np.cumsum(seg)])
+        if np.any(np.diff(s) < 0):
+            raise InvalidInput("path.states.s", "must not decrease along the path")
+        keep = np.concatenate([[True], np.diff(s) > 1e-9])
+        if keep.sum() < 2:
+            raise InvalidInput("path.states", "the path has zero length")
+        v = _field(states, "v", False)
+        if v is not None and np.any(v < 0):
+            raise InvalidInput(
+                "path.states.v", "reverse motion (v < 0) is not supported by the VPIP schedule"
+            )
+        t = _field(states, "t", False)
+        if t is None or np.any(np.diff(t[keep]) <= 0):
+            t = s / profile.max_speed_m_s
+        if v is None:
+            v = (
+                np.gradient(s[keep], t[keep])
+                if keep.sum() > 2
+                else np.full(int(keep.sum()), profile.max_speed_m_s)
+            )
+            v_full = np.interp(s, s[keep], v)
+        else:
+            v_full = v
+        k = _field(states, "curvature", False)
+        if k is None:
+            k = np.gradient(yaw[keep], s[keep])
+            k = np.interp(s, s[keep], k)
+        return cls(s[keep], x[keep], y[keep], yaw[keep], k[keep], t[keep], v_full[keep])
+
+    @property
+    def length_m(self) -> float:
+        return float(self.s[-1] - self.s[0])
+
+    def pose_at(self, s: float) -> tuple[float, float, float]:
+        return (
+            float(np.interp(s, self.s, self.x)),
+            float(np.interp(s, self.s, self.y)),
+            float(np.interp(s, self.s, self.yaw)),
+        )
+
+    def curvature_at(self, s: float) -> float:
+        return float(np.interp(s, self.s, self.curvature))
+
+    def s_at_t(self, t: float) -> float:
+        return float(np.interp(t, self.t, self.s))
+
+    def v_at_t(self, t: float) -> float:
+        return float(np.interp(t, self.t, self.v))
+
+
+@dataclass(frozen=True)
+class TrackingGains:
+    """Path-tracking correction on top of the path curvature (assumptions, not from the paper).
+
+    κ_cmd = κ_path(s + v·lookahead) + k_heading·(ψ_ref − ψ) − k_lateral·e_lat, e_lat > 0 left of the path;
+    desired speed = v_plan(t) + k_progress·(s_plan(t) − s).
+    """
+
+    k_heading_per_m: float = 1.5
+    k_lateral_per_m2: float = 1.0
+    k_progress_per_s: float = 0.5
+    lookahead_s: float = 0.5
+
+
+def _wrap(a: float) -> float:
+    return (a + math.pi) % (2.0 * math.pi) - math.pi
+
+
+def run_schedule(
+    plan: Mapping[str, Any],
+    profile: RobotProfile,
+    driver: str = "vpip",
+    tracking: TrackingGains | None = None,
+    max_duration_s: float | None = None,
+) -> dict[str, Any]:
+    """Run the cascade along ``plan`` and return the time series (JSON-ready, SI units, radians).
+
+    ``series`` holds, per tick: t, desired and simulated roll, desired and simulated ω, φ_VPIP,
+    θ_VPIP, the pitch phase, the tracked pose (x, y, yaw, s) and ``rod_length_m`` (ticks × 2n commanded
+    lengths after the rod-speed limit). Stops when the end of the path is reached or after
+    ``max_duration_s`` (default: 1.5 × the plan's duration + 10 s).
+    """
+    if driver not in DRIVERS:
+        raise InvalidInput("driver", f"must be one of {', '.join(DRIVERS)}, got {driver!r}")
+    tracking = tracking or TrackingGains()
+    params = rod_params(profile)
+    roll_gains, pitch_gains, rate_hz = gains_from_section(vpip_section(profile))
+    plant_p = PlantParams.from_profile(profile, params)
+    ref = PathReference.from_plan(plan, profile)
+    dt = 1.0 / rate_hz
+    t_end = float(ref.t[-1] - ref.t[0])
+    limit_s = max_duration_s if max_duration_s is not None else 1.5 * t_end + 10.0
+    model = profile.roll_model
+    max_k = profile.max_curvature
+    max_roll = profile.max_roll_rad
+    max_omega = profile.max_speed_m_s / params.r_m
+    roll0 = float(model.roll_for_curvature(ref.curvature[0]))
+    roll0 = max(-max_roll, min(max_roll, roll0))
+
+    roll_ctl = RollController(roll_gains, dt)
+    pitch_ctl = PitchController(pitch_gains, dt)
+    vpip = RodDriver(params, dt)
+    simple = SimpleDriver(params, dt)
+    plant = SurrogatePlant(plant_p, roll_rad=roll0, omega_rad_s=0.0)
+    x, y, yaw = float(ref.x[0]), float(ref.y[0]), float(ref.yaw[0])
+    s_sim, phase, roll_des = float(ref.s[0]), 0.0, roll0
+    s_goal = float(ref.s[-1])
+    rec: dict[str, list[Any]] = {
+        k: []
+        for k in (
+            "t",
+            "roll_desired_rad",
+            "roll_rad",
+            "omega_desired_rad_s",
+            "omega_rad_s",
+            "phi_vpip_rad",
+            "theta_vpip_rad",
+            "pitch_phase_rad",
+            "curvature_cmd",
+            "x",
+            "y",
+            "yaw",
+            "s",
+            "rod_length_m",
+        )
+    }
+    max_lat = 0.0
+    reached = False
+    steps = math.ceil(limit_s / dt)
+    for k in range(steps + 1):
+        t = k * dt
+        t_plan = ref.t[0] + t
+        # 1. desired curvature → desired roll (profile roll model), rate-limited
+        v_plan = ref.v_at_t(t_plan)
+        xr, yr, yawr = ref.pose_at(s_sim)
+        e_lat = -(x - xr) * math.sin(yawr) + (y - yr) * math.cos(yawr)
+        max_lat = max(max_lat, abs(e_lat))
+        k_ff = ref.curvature_at(s_sim + max(v_plan, 0.05) * tracking.lookahead_s)
+        k_cmd = k_ff + tracking.k_heading_per_m * _wrap(yawr - yaw) - tracking.k_lateral_per_m2 * e_lat
+        k_cmd = max(-max_k, min(max_k, k_cmd))
+        target_roll = max(-max_roll, min(max_roll, float(model.roll_for_curvature(k_cmd))))
+        step_roll = profile.max_roll_rate_rad_s * dt
+        roll_des += max(-step_roll, min(step_roll, target_roll - roll_des))
+        # 2. desired speed from the plan's timing
+        v_des = v_plan + tracking.k_progress_per_s * (ref.s_at_t(t_plan) - s_sim)
+        omega_des = max(0.0, min(max_omega, v_des / params.r_m))
+        if s_sim >= s_goal:
+            omega_des = 0.0
+        roll, omega = plant.roll_rad, plant.omega_rad_s
+        # 3.–4. controllers and rods
+        if driver == "vpip":
+            phi_v = roll_ctl.command(roll, roll_des)
+            theta_v = pitch_ctl.command(omega, omega_des)
+            vpip.step(phi_v, theta_v, roll, phase)
+            lengths = vpip.lengths_m
+        else:
+            targets = simple.step(roll, roll_des, phase).length_m
+            lengths = simple.lengths_m
+            phi_v, theta_v = equivalent_plane(
+                params, targets, roll, phase, (roll_gains.output_limit, pitch_gains.output_limit)
+            )
+        for key, value in (
+            ("t", t),
+            ("roll_desired_rad", roll_des),
+            ("roll_rad", roll),
+            ("omega_desired_rad_s", omega_des),
+            ("omega_rad_s", omega),
+            ("phi_vpip_rad", phi_v),
+            ("theta_vpip_rad", theta_v),
+            ("pitch_phase_rad", phase),
+            ("curvature_cmd", k_cmd),
+            ("x", x),
+            ("y", y),
+            ("yaw", yaw),
+            ("s", s_sim),
+        ):
+            rec[key].append(float(value))
+        rec["rod_length_m"].append([float(v) for v in lengths])
+        if s_sim >= s_goal:
+            reached = True
+            break
+        # surrogate plant and sphere kinematics (paper 001 eq. 1)
+        plant.step(phi_v, theta_v, dt)
+        roll_rate = (plant.roll_rad - roll) / dt
+        v = omega * profile.radius_m
+        yaw_new = yaw + v * float(model.curvature(roll)) * dt
+        x += (v * math.cos(yaw) - profile.radius_m * roll_rate * math.sin(yaw)) * dt
+        y += (v * math.sin(yaw) + profile.radius_m * roll_rate * math.cos(yaw)) * dt
+        yaw = yaw_new
+        s_sim += max(v, 0.0) * dt
+        phase += omega * dt
+
+    lengths_arr = np.asarray(rec["rod_length_m"])
+    rod_rate = float(np.max(np.abs(np.diff(lengths_arr, axis=0))) / dt) if len(lengths_arr) > 1 else 0.0
+    roll_err = np.asarray(rec["roll_rad"]) - np.asarray(rec["roll_desired_rad"])
+    gx, gy, _ = ref.pose_at(s_goal)
+    summary = {
+        "reached_end": reached,
+        "duration_s": rec["t"][-1],
+        "plan_duration_s": t_end,
+        "ticks": len(rec["t"]),
+        "path_length_m": ref.length_m,
+        "max_lateral_error_m": max_lat,
+        "final_position_error_m": math.hypot(x - gx, y - gy),
+        "rms_roll_error_rad": float(np.sqrt(np.mean(roll_err**2))),
+        "max_rod_rate_m_s": rod_rate,
+        "max_abs_phi_vpip_rad": float(np.max(np.abs(rec["phi_vpip_rad"]))),
+        "max_abs_theta_vpip_rad": float(np.max(np.abs(rec["theta_vpip_rad"]))),
+    }
+    n = params.rods_per_side
+    return {
+        "driver": driver,
+        "robot": profile.name,
+        "rate_hz": rate_hz,
+        "plant": {"note": SURROGATE_NOTE, **{k: getattr(plant_p, k) for k in plant_p.__dataclass_fields__}},
+        "params": params.to_json(),
+        "rods": [{"index": i, "side": "left" if i < n else "right"} for i in range(2 * n)],
+        "summary": summary,
+        "series": rec,
+    }

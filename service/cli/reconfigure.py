@@ -1,0 +1,91 @@
+"""``sphereplan reconfigure``: bring a sphere to rest at a goal with P on top (paper 004 Spherobot)."""
+
+from __future__ import annotations
+
+import argparse
+from typing import Any
+
+from planner.errors import InvalidInput
+from planner.occupancy import OccupancyGrid
+from planner.reconfigure import METHODS, plan_reconfiguration
+from service.cli._io import emit_json, finite_float, positive_float
+
+VERB = "reconfigure"
+HELP = "Plan a Spherobot reconfiguration (position, P on top, optional heading) and prove it by rolling."
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--method", choices=METHODS, default="arc", help="arc (§4, default) or triangle (§3)")
+    parser.add_argument(
+        "--radius", type=positive_float, metavar="R", help="sphere radius in m (default: profile)"
+    )
+    parser.add_argument("--start", type=finite_float, nargs=2, metavar=("X", "Y"), required=True)
+    parser.add_argument(
+        "--start-tilt",
+        type=finite_float,
+        nargs=2,
+        metavar=("THETA", "ALPHA"),
+        default=[0.0, 0.0],
+        help="P's polar angle from the top and its azimuth (default 0 0)",
+    )
+    parser.add_argument(
+        "--start-spin", type=finite_float, default=0.0, metavar="PSI", help="spin about P (default 0)"
+    )
+    parser.add_argument("--goal", type=finite_float, nargs=2, metavar=("X", "Y"), required=True)
+    parser.add_argument(
+        "--goal-heading",
+        type=finite_float,
+        metavar="PSI",
+        help="azimuth of body +x with P on top; omitted = partial reconfiguration",
+    )
+    parser.add_argument(
+        "--alpha-final", type=finite_float, metavar="A", help="arc method: direction of the last roll"
+    )
+    parser.add_argument(
+        "--roll-rate", type=positive_float, metavar="W", help="shell rate in rad/s (default: profile)"
+    )
+    parser.add_argument(
+        "--degrees", action="store_true", help="input angles are in degrees (output stays radians)"
+    )
+    parser.add_argument("--map", metavar="M.yaml", help="check the swept sphere against this map")
+    parser.add_argument("--allow-unknown", action="store_true", help="treat unknown map cells as free")
+    parser.add_argument("--plot", metavar="F.png", help="draw the ground path and P's track on the sphere")
+    parser.add_argument("--out", metavar="F.json", help="write the JSON here instead of stdout")
+    parser.set_defaults(func=run)
+
+
+def _load_map(path: str) -> OccupancyGrid:
+    try:
+        from planner.mapio import load_map
+    except ImportError:
+        raise InvalidInput("map", "map loading (planner.mapio) is not available in this build") from None
+    return load_map(path)
+
+
+def request_from_args(args: argparse.Namespace) -> dict[str, Any]:
+    """The JSON request the parsed options describe (angles as typed, with ``degrees``)."""
+    return {
+        "method": args.method,
+        "radius_m": args.radius,
+        "start": list(args.start),
+        "start_tilt": list(args.start_tilt),
+        "start_spin": args.start_spin,
+        "goal": list(args.goal),
+        "goal_heading": args.goal_heading,
+        "alpha_final": args.alpha_final,
+        "roll_rate_rad_s": args.roll_rate,
+        "degrees": args.degrees,
+        "map": args.map,
+        "allow_unknown": args.allow_unknown,
+    }
+
+
+def run(args: argparse.Namespace) -> int:
+    grid = _load_map(args.map) if args.map else None
+    result = plan_reconfiguration(request_from_args(args), grid=grid)
+    emit_json(result, args.out)
+    if args.plot:
+        from planner.reconfigure_plot import plot_reconfiguration
+
+        plot_reconfiguration(result, args.plot, grid)
+    return 0

@@ -1,0 +1,131 @@
+"""``sphereplan vpip``: rod lengths, roll↔radius, calibration and 100 Hz rod schedules (paper 000)."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+from pathlib import Path
+from typing import Any
+
+from planner.errors import InvalidInput
+from planner.robot import load_robot
+from planner.vpip import api
+from service.cli._io import emit_json, finite_float, positive_float
+
+VERB = "vpip"
+HELP = "VPIP rod driver for rod-driven spheres (daedalus): rods, radius, roll, calibrate, schedule"
+
+
+def _angle(args: argparse.Namespace, value: float) -> float:
+    return math.radians(value) if args.degrees else value
+
+
+def _rods(args: argparse.Namespace) -> int:
+    emit_json(
+        api.rods_report(
+            _angle(args, args.phi_vpip),
+            _angle(args, args.theta_vpip),
+            _angle(args, args.roll),
+            _angle(args, args.pitch_phase),
+            args.robot,
+        ),
+        None,
+    )
+    return 0
+
+
+def _radius(args: argparse.Namespace) -> int:
+    emit_json(api.radius_report(_angle(args, args.roll), args.robot), None)
+    return 0
+
+
+def _roll(args: argparse.Namespace) -> int:
+    emit_json(api.roll_report(args.radius, args.robot, left=not args.right), None)
+    return 0
+
+
+def _read(path: str, field: str) -> str:
+    p = Path(path)
+    if not p.is_file():
+        raise InvalidInput(field, f"file {path} does not exist")
+    return p.read_text()
+
+
+def _calibrate(args: argparse.Namespace) -> int:
+    profile = load_robot(args.robot)
+    result = api.calibrate_report(_read(args.runs, "runs"), profile)
+    if args.out:
+        Path(args.out).write_text(api.profile_toml(profile, result["roll_model"]))
+        load_robot(args.out)  # the written profile must load
+        result["profile_written"] = str(args.out)
+    emit_json(result, None)
+    return 0
+
+
+def _schedule(args: argparse.Namespace) -> int:
+    try:
+        plan: Any = json.loads(_read(args.path, "path"))
+    except json.JSONDecodeError as exc:
+        raise InvalidInput("path", f"{args.path} is not valid JSON: {exc}") from None
+    result = api.schedule_report(plan, args.robot, args.driver)
+    emit_json(result, args.out)
+    if args.plot:
+        from planner.vpip.plot import plot_schedule
+
+        plot_schedule(result, args.plot, plan)
+    emit_json(
+        {"out": str(args.out), "plot": args.plot, "driver": result["driver"], **result["summary"]}, None
+    )
+    return 0
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    sub = parser.add_subparsers(dest="vpip_command", required=True, parser_class=type(parser))
+
+    def common(p: argparse.ArgumentParser, robot_default: str | None = "daedalus") -> None:
+        p.add_argument("--robot", default=robot_default, help="profile name or TOML path (default: daedalus)")
+
+    rods = sub.add_parser("rods", help="eq. 18 length of every rod for one plane, roll and pitch phase")
+    rods.add_argument(
+        "--phi-vpip", type=finite_float, required=True, help="plane roll, > 0 lowers the left side"
+    )
+    rods.add_argument(
+        "--theta-vpip", type=finite_float, required=True, help="plane pitch, > 0 drives forward"
+    )
+    rods.add_argument("--roll", type=finite_float, default=0.0, help="robot roll, > 0 leans left (default 0)")
+    rods.add_argument("--pitch-phase", type=finite_float, default=0.0, help="how far the sphere has rolled")
+    rods.add_argument("--degrees", action="store_true", help="input angles in degrees (output stays radians)")
+    common(rods)
+    rods.set_defaults(func=_rods)
+
+    radius = sub.add_parser("radius", help="turning radius held at a roll angle (profile roll model)")
+    radius.add_argument("--roll", type=finite_float, required=True, help="roll (rad; --degrees for degrees)")
+    radius.add_argument("--degrees", action="store_true")
+    common(radius)
+    radius.set_defaults(func=_radius)
+
+    roll = sub.add_parser("roll", help="roll angle that holds a turning radius (profile roll model)")
+    roll.add_argument("--radius", type=positive_float, required=True, help="turning radius (m)")
+    roll.add_argument("--right", action="store_true", help="right turn (negative roll)")
+    common(roll)
+    roll.set_defaults(func=_roll)
+
+    cal = sub.add_parser("calibrate", help="fit a calibrated roll model from measured runs (CSV)")
+    cal.add_argument("--runs", required=True, help="CSV with header roll_deg,diameter_m (one row per run)")
+    cal.add_argument("--out", help="write the profile with the fitted table to this TOML file")
+    common(cal)
+    cal.set_defaults(func=_calibrate)
+
+    sched = sub.add_parser("schedule", help="100 Hz VPIP angles and rod lengths along a planned path")
+    sched.add_argument(
+        "--path", required=True, help="planner result JSON (states x, y, yaw, roll, v, t, s, curvature)"
+    )
+    sched.add_argument("--out", required=True, help="write the time series JSON here")
+    sched.add_argument("--plot", help="write a PNG: rod-length heat map, roll and plane angles, path")
+    sched.add_argument(
+        "--driver", choices=("vpip", "simple"), default="vpip", help="rod driver (default vpip)"
+    )
+    common(sched, None)
+    sched.set_defaults(func=_schedule)
+    parser.set_defaults(func=lambda args: args.func(args))

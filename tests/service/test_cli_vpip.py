@@ -1,0 +1,101 @@
+"""``sphereplan vpip`` in-process: exit codes and JSON."""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+import pytest
+
+from planner.robot import load_robot
+from planner.vpip.api import rods_report
+from planner.vpip.samples import circle_plan
+from service.cli import main
+
+
+def _run(capsys: pytest.CaptureFixture[str], argv: list[str]) -> tuple[int, dict]:
+    code = main(argv)
+    out = capsys.readouterr().out
+    return code, (json.loads(out) if code == 0 else {})
+
+
+def test_rods_prints_the_api_result(capsys: pytest.CaptureFixture[str]) -> None:
+    code, out = _run(
+        capsys,
+        [
+            "vpip",
+            "rods",
+            "--phi-vpip",
+            "5",
+            "--theta-vpip",
+            "20",
+            "--roll",
+            "2",
+            "--pitch-phase",
+            "10",
+            "--degrees",
+        ],
+    )
+    assert code == 0
+    assert out == rods_report(math.radians(5), math.radians(20), math.radians(2), math.radians(10))
+    assert len(out["rods"]) == 16 and {r["side"] for r in out["rods"]} == {"left", "right"}
+    assert set(out["params"]) >= {"r_m", "r_s", "l_max"}
+
+
+def test_radius_and_roll(capsys: pytest.CaptureFixture[str]) -> None:
+    code, out = _run(capsys, ["vpip", "radius", "--roll", "15", "--degrees"])
+    assert code == 0 and out["radius_m"] == pytest.approx(0.85)
+    code, out = _run(capsys, ["vpip", "roll", "--radius", "1.0"])
+    assert code == 0 and out["roll_deg"] == pytest.approx(10.0, abs=1e-4)
+    code, out = _run(capsys, ["vpip", "radius", "--roll", "0"])
+    assert code == 0 and out["radius_m"] is None
+
+
+def test_bad_input_exits_2(capsys: pytest.CaptureFixture[str], tmp_path: Path) -> None:
+    for argv in (
+        ["vpip", "rods", "--phi-vpip", "nan", "--theta-vpip", "0"],
+        ["vpip", "roll", "--radius", "-1"],
+    ):
+        with pytest.raises(SystemExit) as exc:
+            main(argv)
+        assert exc.value.code == 2
+    assert main(["vpip", "rods", "--phi-vpip", "100", "--theta-vpip", "0", "--degrees"]) == 2
+    assert main(["vpip", "rods", "--phi-vpip", "0", "--theta-vpip", "0", "--robot", "zju-60"]) == 2
+    assert (
+        main(["vpip", "schedule", "--path", str(tmp_path / "none.json"), "--out", str(tmp_path / "o.json")])
+        == 2
+    )
+    bad = tmp_path / "bad.json"
+    bad.write_text('{"states": [{"x": 0}]}')
+    assert main(["vpip", "schedule", "--path", str(bad), "--out", str(tmp_path / "o.json")]) == 2
+    err = capsys.readouterr().err
+    assert "path.states" in err
+
+
+def test_calibrate_writes_a_loadable_profile(capsys: pytest.CaptureFixture[str], tmp_path: Path) -> None:
+    runs = tmp_path / "runs.csv"
+    runs.write_text("roll_deg,diameter_m\n4,3.0\n8,2.2\n12,1.8\n")
+    prof = tmp_path / "mine.toml"
+    code, out = _run(capsys, ["vpip", "calibrate", "--runs", str(runs), "--out", str(prof)])
+    assert code == 0 and out["roll_model"]["diameter_m"] == pytest.approx([3.0, 2.2, 1.8])
+    mine = load_robot(str(prof))
+    assert mine.roll_model.turning_radius(math.radians(8)) == pytest.approx(1.1)
+    assert mine.extra["vpip"] == load_robot("daedalus").extra["vpip"]
+    bad = tmp_path / "bad.csv"
+    bad.write_text("roll,d\n1,2\n")
+    assert main(["vpip", "calibrate", "--runs", str(bad)]) == 2
+
+
+def test_schedule_writes_series_and_plot(capsys: pytest.CaptureFixture[str], tmp_path: Path) -> None:
+    plan = tmp_path / "plan.json"
+    plan.write_text(json.dumps(circle_plan(load_robot("daedalus"), 1.2, 0.2)))
+    out_json, png = tmp_path / "sched.json", tmp_path / "sched.png"
+    code, summary = _run(
+        capsys, ["vpip", "schedule", "--path", str(plan), "--out", str(out_json), "--plot", str(png)]
+    )
+    assert code == 0 and summary["reached_end"]
+    result = json.loads(out_json.read_text())
+    assert result["driver"] == "vpip" and "surrogate" in result["plant"]["note"]
+    assert len(result["series"]["rod_length_m"][0]) == 16
+    assert png.stat().st_size > 10_000
