@@ -43,12 +43,24 @@ from planner.occupancy import OccupancyGrid
 from planner.result import failure_json
 from planner.robot import DEFAULT_ROBOT, builtin_robots, load_robot
 from planner.search import PlannerOptions
-from service.wire import MAX_INLINE_CELLS, MAX_TIME_LIMIT_S, PlanRequest, SimulateRequest, TensegrityStaticRequest
+from service.wire import (
+    MAX_INLINE_CELLS,
+    MAX_TIME_LIMIT_S,
+    PlanIn,
+    PlanRequest,
+    ReconfigureRequest,
+    SimulateRequest,
+    TensegrityStaticRequest,
+    VpipRodsRequest,
+    VpipScheduleRequest,
+)
 
 log = logging.getLogger(__name__)
 
 #: Nav2 ComputePathToPose UNKNOWN: the code of every error that is not a planning failure
 UNKNOWN_ERROR_CODE = 200
+#: farthest reconfiguration goal, in sphere radii from the start (paper 004's examples are a few radii)
+MAX_RECONFIGURE_RADII = 200
 MAP_SUFFIXES = (".yaml", ".yml", ".stl", ".obj", ".ply")
 MESH_SUFFIXES = (".stl", ".obj", ".ply")
 
@@ -126,9 +138,14 @@ def error_outcome(kind: Kind, msg: str, field: str | None = None, code: int = UN
     return Outcome(kind, _dumps({"error_code": code, "error_msg": msg, "field": field}), code)
 
 
-def outcome_of_exception(exc: BaseException, robot_json: Any = None) -> Outcome:
-    """Map a sphereplan error onto an :class:`Outcome` (the same mapping everywhere)."""
+def outcome_of_exception(exc: BaseException, robot_json: Any = None, plan: bool = True) -> Outcome:
+    """Map a sphereplan error onto an :class:`Outcome` (the same mapping everywhere). A planning failure
+    of ``/v1/plan`` (``plan``) carries the failed plan-result JSON; of other capabilities
+    ``{status: failed, error_code, error_msg, field: null}``."""
     if isinstance(exc, PlanningError):
+        if not plan:
+            body = {"status": "failed", "error_code": exc.code, "error_msg": exc.msg, "field": None}
+            return Outcome("failed", _dumps(body), exc.code)
         body = failure_json(exc.code, exc.msg, None)
         body["robot"] = robot_json
         return Outcome("failed", _dumps(body), exc.code)
@@ -273,6 +290,9 @@ def plan_job(request: dict[str, Any], map_path: str | None) -> Outcome:
         return Outcome("ok", _dumps(result.to_json()))
     except SpherePlanError as exc:
         return outcome_of_exception(exc, robot_json)
+    except (ValueError, ArithmeticError) as exc:  # see _job
+        log.warning("plan: computation failed for a request", exc_info=True)
+        return error_outcome("bad_input", f"the plan computation failed for this input: {type(exc).__name__}: {exc}")
     except Exception as exc:  # a bug, not the client's fault: log it and answer 500
         log.exception("plan job failed")
         return outcome_of_exception(exc)
@@ -283,34 +303,76 @@ def simulate_job(request: dict[str, Any], map_path: str | None, robot_name: str)
     from planner.simulate import SimulationOptions, simulate_plan
     from planner.tracker import MPCParams
 
-    try:
+    def compute() -> dict[str, Any]:
         grid = load_map_file(Path(map_path), None) if map_path is not None else inline_grid(request["map"])
         options = SimulationOptions(control_rate_hz=request["rate_hz"], tracker=request["tracker"],
                                     mpc=MPCParams(horizon=request["horizon"]), time_limit_s=request["time_limit_s"])
-        result = simulate_plan(grid, request["path"], load_robot(robot_name), seed=request["seed"],
-                               noise=request["noise"], options=options)
-        return Outcome("ok", _dumps(result))
+        return simulate_plan(grid, request["path"], load_robot(robot_name), seed=request["seed"],
+                             noise=request["noise"], options=options)
+
+    return _job("simulate", compute)
+
+
+def _job(name: str, compute: Callable[[], Any]) -> Outcome:
+    """Run one capability's computation: its JSON, or the error outcome.
+
+    A ``ValueError``/``ArithmeticError`` that is not a sphereplan error means the request's numbers took
+    the computation outside its domain (or produced NaN): answered as bad input (422), logged with the
+    traceback so the unchecked case can be turned into a named error in ``planner/``.
+    """
+    try:
+        return Outcome("ok", _dumps(compute()))
     except SpherePlanError as exc:
-        return outcome_of_exception(exc)
+        return outcome_of_exception(exc, plan=False)
+    except (ValueError, ArithmeticError) as exc:
+        log.warning("%s: computation failed for a request", name, exc_info=True)
+        return error_outcome("bad_input", f"the {name} computation failed for this input: {type(exc).__name__}: {exc}")
     except Exception as exc:
-        log.exception("simulate job failed")
+        log.exception("%s job failed", name)
         return outcome_of_exception(exc)
+
+
+def _radians(request: dict[str, Any], key: str) -> float:
+    return math.radians(request[key]) if request["degrees"] else float(request[key])
 
 
 def tensegrity_static_job(request: dict[str, Any]) -> Outcome:
-    """Run ``static_equilibria`` in a worker (what ``sphereplan tensegrity static`` prints)."""
+    """``static_equilibria`` in a worker (what ``sphereplan tensegrity static`` prints)."""
     from planner.tensegrity import static_equilibria
 
-    try:
-        to_rad = math.radians if request["degrees"] else float
-        result = static_equilibria(to_rad(request["theta1"]), to_rad(request["theta2"]), load_robot(request["robot"]),
-                                   request["verify"])
-        return Outcome("ok", _dumps(result))
-    except SpherePlanError as exc:
-        return outcome_of_exception(exc)
-    except Exception as exc:
-        log.exception("tensegrity job failed")
-        return outcome_of_exception(exc)
+    return _job("tensegrity", lambda: static_equilibria(
+        _radians(request, "theta1"), _radians(request, "theta2"), load_robot(request["robot"]), request["verify"]))
+
+
+def reconfigure_job(request: dict[str, Any], map_path: str | None) -> Outcome:
+    """``plan_reconfiguration`` in a worker (what ``sphereplan reconfigure`` prints)."""
+    from planner.reconfigure import plan_reconfiguration
+
+    def compute() -> dict[str, Any]:
+        grid = None
+        if map_path is not None:
+            grid = load_map_file(Path(map_path), None)
+        elif request["map"] is not None:
+            grid = inline_grid(request["map"])
+        return plan_reconfiguration({k: v for k, v in request.items() if k != "map"}, grid=grid)
+
+    return _job("reconfigure", compute)
+
+
+def vpip_rods_job(request: dict[str, Any]) -> Outcome:
+    """``rods_report`` in a worker (what ``sphereplan vpip rods`` prints)."""
+    from planner.vpip.api import rods_report
+
+    return _job("vpip rods", lambda: rods_report(
+        _radians(request, "phi_vpip"), _radians(request, "theta_vpip"), _radians(request, "roll"),
+        _radians(request, "pitch_phase"), request["robot"]))
+
+
+def vpip_schedule_job(request: dict[str, Any], robot_name: str) -> Outcome:
+    """``schedule_report`` in a worker (the series ``sphereplan vpip schedule --out`` writes)."""
+    from planner.vpip.api import schedule_report
+
+    return _job("vpip schedule", lambda: schedule_report(request["path"], robot_name, request["driver"]))
 
 
 # ------------------------------------------------------------------------------------------ service
@@ -462,16 +524,44 @@ class PlanningService:
             raise InvalidInput("map.data", f"{cells} cells; this server accepts at most {limit}")
         return None
 
-    def submit_simulate(self, request: SimulateRequest) -> Future[Outcome]:
-        """Queue a closed-loop simulation of ``request.path`` (robot: the request's, else the plan's)."""
-        robot = request.robot
+    def _plan_robot(self, robot: str | None, path: PlanIn, default: str) -> str:
+        """The robot a plan-consuming request uses: its own, else the plan's (built-in only), else ``default``."""
         if robot is None:
-            robot = request.path.robot.name if request.path.robot is not None else DEFAULT_ROBOT
+            robot = path.robot.name if path.robot is not None else default
             if robot not in builtin_robots():
                 raise NotFound("path.robot.name", f"the plan's robot {robot!r} is not a built-in profile; "
                                                   f"give robot (one of {', '.join(builtin_robots())})")
         self.resolve_robot(robot)
+        return robot
+
+    def submit_simulate(self, request: SimulateRequest) -> Future[Outcome]:
+        """Queue a closed-loop simulation of ``request.path`` (robot: the request's, else the plan's)."""
+        robot = self._plan_robot(request.robot, request.path, DEFAULT_ROBOT)
         return self._submit(simulate_job, request.request_json(), self._map_argument(request.map), robot)
+
+    def submit_reconfigure(self, request: ReconfigureRequest) -> Future[Outcome]:
+        """Queue a Spherobot reconfiguration (optionally checked against a map). The goal may be at most
+        ``MAX_RECONFIGURE_RADII`` sphere radii from the start: the rolled result is sampled along the way,
+        so its size and cost grow with distance / radius."""
+        from planner.reconfigure import ROBOT
+
+        radius = request.radius_m if request.radius_m is not None else load_robot(ROBOT).radius_m
+        distance = math.dist(request.start, request.goal)
+        if distance > MAX_RECONFIGURE_RADII * radius:
+            raise InvalidInput("goal", f"is {distance:.3g} m from the start; this server rolls at most "
+                                       f"{MAX_RECONFIGURE_RADII} sphere radii ({MAX_RECONFIGURE_RADII * radius:.3g} m)")
+        map_path = None if request.map is None else self._map_argument(request.map)
+        return self._submit(reconfigure_job, request.request_json(), map_path)
+
+    def submit_vpip_rods(self, request: VpipRodsRequest) -> Future[Outcome]:
+        """Queue one eq. 18 rod-length evaluation."""
+        self.resolve_robot(request.robot)
+        return self._submit(vpip_rods_job, request.request_json())
+
+    def submit_vpip_schedule(self, request: VpipScheduleRequest) -> Future[Outcome]:
+        """Queue a 100 Hz VPIP schedule along ``request.path`` (robot: the request's, the plan's, daedalus)."""
+        robot = self._plan_robot(request.robot, request.path, "daedalus")
+        return self._submit(vpip_schedule_job, request.request_json(), robot)
 
     def submit_tensegrity_static(self, request: TensegrityStaticRequest) -> Future[Outcome]:
         """Queue the TeXploR static-state computation."""

@@ -41,9 +41,12 @@ from service.wire import (
     MapInfo,
     PlanRequest,
     PlanResultOut,
+    ReconfigureRequest,
     RobotInfo,
     SimulateRequest,
     TensegrityStaticRequest,
+    VpipRodsRequest,
+    VpipScheduleRequest,
     describe_errors,
 )
 
@@ -173,6 +176,37 @@ async def post_simulate(body: SimulateRequest, service: Service) -> Response:
     return outcome_response(await asyncio.wrap_future(future), service.settings.retry_after_s)
 
 
+reconfigure = APIRouter(prefix="/v1", tags=["reconfigure"])
+
+
+@reconfigure.post("/reconfigure", responses=ERRORS)
+async def post_reconfigure(body: ReconfigureRequest, service: Service) -> Response:
+    """Spherobot reconfiguration (paper 004): reach ``goal`` with the camera point P on top (and, with
+    ``goal_heading``, a heading), proved by rolling the sphere through SO(3). What ``sphereplan
+    reconfigure`` prints; with ``map`` the swept sphere is checked against it (failures 203–206, 208)."""
+    future = await asyncio.to_thread(service.submit_reconfigure, body)
+    return outcome_response(await asyncio.wrap_future(future), service.settings.retry_after_s)
+
+
+vpip = APIRouter(prefix="/v1/vpip", tags=["vpip"])
+
+
+@vpip.post("/rods", responses=ERRORS)
+async def post_vpip_rods(body: VpipRodsRequest, service: Service) -> Response:
+    """Eq. 18 length of every rod of a rod-driven sphere (paper 000) for one VPIP plane, roll and pitch
+    phase: what ``sphereplan vpip rods`` prints."""
+    future = await asyncio.to_thread(service.submit_vpip_rods, body)
+    return outcome_response(await asyncio.wrap_future(future), service.settings.retry_after_s)
+
+
+@vpip.post("/schedule", responses=ERRORS)
+async def post_vpip_schedule(body: VpipScheduleRequest, service: Service) -> Response:
+    """The 100 Hz VPIP cascade along a plan: plane angles and rod lengths per tick, the series
+    ``sphereplan vpip schedule --out`` writes."""
+    future = await asyncio.to_thread(service.submit_vpip_schedule, body)
+    return outcome_response(await asyncio.wrap_future(future), service.settings.retry_after_s)
+
+
 tensegrity = APIRouter(prefix="/v1/tensegrity", tags=["tensegrity"])
 
 
@@ -291,6 +325,8 @@ def create_app(settings: ServiceSettings | None = None, service: PlanningService
     app.include_router(health)
     app.include_router(plan)
     app.include_router(simulate)
+    app.include_router(reconfigure)
+    app.include_router(vpip)
     app.include_router(tensegrity)
     app.include_router(maps)
     app.include_router(robots)

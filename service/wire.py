@@ -12,6 +12,7 @@ they are looked up in the maps folder listing and the built-in profiles, never j
 
 from __future__ import annotations
 
+import math
 import re
 from collections.abc import Sequence
 from typing import Annotated, Any, Literal
@@ -25,12 +26,22 @@ MAX_TIME_LIMIT_S = 60.0
 
 #: longest plan ``/v1/simulate`` accepts (states; 20 000 × 4 cm = 800 m)
 MAX_PLAN_STATES = 20_000
+#: longest path (m, along the states) ``/v1/simulate`` and ``/v1/vpip/schedule`` roll
+MAX_PLAN_LENGTH_M = 200.0
 #: longest simulated time ``/v1/simulate`` accepts (s)
 MAX_SIM_TIME_S = 3600.0
+
+#: largest |coordinate| accepted (m) and largest |angle| (rad or degrees)
+MAX_COORDINATE_M = 1e6
+MAX_ANGLE = 1e4
 
 NAME_PATTERN = r"^[A-Za-z0-9_-][A-Za-z0-9_.-]{0,63}$"
 
 Name = Annotated[str, Field(pattern=NAME_PATTERN, description="a plain name: no '/', no leading '.'")]
+#: a position (m): bounded so that no computation meets absurd magnitudes
+Metres = Annotated[float, Field(ge=-MAX_COORDINATE_M, le=MAX_COORDINATE_M, description="m")]
+#: an angle (rad, or degrees where the request says so)
+Angle = Annotated[float, Field(ge=-MAX_ANGLE, le=MAX_ANGLE)]
 
 
 class _Strict(BaseModel):
@@ -40,9 +51,9 @@ class _Strict(BaseModel):
 class PoseIn(_Strict):
     """A planar pose in the ``map`` frame."""
 
-    x: float = Field(description="m")
-    y: float = Field(description="m")
-    yaw: float = Field(description="rad, counter-clockwise from +x")
+    x: Metres
+    y: Metres
+    yaw: Angle = Field(description="rad, counter-clockwise from +x")
 
     def as_tuple(self) -> tuple[float, float, float]:
         return float(self.x), float(self.y), float(self.yaw)
@@ -53,8 +64,8 @@ class InlineGrid(_Strict):
     the BOTTOM (y = origin y), as ``nav_msgs/OccupancyGrid``; at most ``MAX_INLINE_CELLS`` cells."""
 
     data: list[list[Annotated[int, Field(ge=-1, le=100)]]] = Field(min_length=1)
-    resolution_m: float = Field(gt=0, le=100)
-    origin: list[float] = Field(default_factory=lambda: [0.0, 0.0, 0.0], min_length=3, max_length=3,
+    resolution_m: float = Field(ge=0.001, le=100)
+    origin: list[Metres] = Field(default_factory=lambda: [0.0, 0.0, 0.0], min_length=3, max_length=3,
                                  description="[x m, y m, yaw rad] of the lower-left corner of cell (0, 0)")
     name: Name = "inline"
 
@@ -105,14 +116,14 @@ class GoalMessage(_Strict):
 class StateIn(_Strict):
     """One row of a plan's ``states`` (DESIGN.md): SI units, radians."""
 
-    x: float
-    y: float
-    yaw: float
-    roll: float
-    v: float
-    t: float
-    s: float
-    curvature: float
+    x: Metres
+    y: Metres
+    yaw: Angle
+    roll: Angle
+    v: Metres
+    t: Metres
+    s: Metres
+    curvature: Metres
 
 
 class RobotRef(BaseModel):
@@ -130,6 +141,13 @@ class PlanIn(BaseModel):
     states: list[StateIn] = Field(min_length=2, max_length=MAX_PLAN_STATES)
     robot: RobotRef | None = None
 
+    @model_validator(mode="after")
+    def _not_too_long(self) -> PlanIn:
+        length = sum(math.hypot(b.x - a.x, b.y - a.y) for a, b in zip(self.states, self.states[1:], strict=False))
+        if length > MAX_PLAN_LENGTH_M:
+            raise ValueError(f"states span {length:.0f} m; at most {MAX_PLAN_LENGTH_M:g} m are simulated here")
+        return self
+
 
 class SimulateRequest(_Strict):
     """``POST /v1/simulate`` and the ``sphereplan/simulate`` query: roll ``path`` (a plan result) in
@@ -141,7 +159,7 @@ class SimulateRequest(_Strict):
     seed: int = Field(default=0, ge=0, le=2**32 - 1, description="seeds every disturbance")
     noise: Literal["none", "default"] = "default"
     tracker: Literal["mpc", "pursuit"] = "mpc"
-    rate_hz: float = Field(default=50.0, gt=0, le=1000, description="control rate")
+    rate_hz: float = Field(default=50.0, ge=1, le=200, description="control rate")
     horizon: int = Field(default=15, ge=1, le=100, description="MPC horizon (steps)")
     time_limit_s: float | None = Field(default=None, gt=0, le=MAX_SIM_TIME_S,
                                        description="simulated seconds (default 2 × rolling time + 20 s)")
@@ -154,11 +172,64 @@ class TensegrityStaticRequest(_Strict):
     """``POST /v1/tensegrity/static``: the four hybrid static states of TeXploR for slider angles θ1, θ2
     (as ``sphereplan tensegrity static``)."""
 
-    theta1: float = Field(description="slider 1 angle (rad, or degrees with degrees=true)")
-    theta2: float = Field(description="slider 2 angle (rad, or degrees with degrees=true)")
+    theta1: Angle = Field(description="slider 1 angle (rad, or degrees with degrees=true)")
+    theta2: Angle = Field(description="slider 2 angle (rad, or degrees with degrees=true)")
     degrees: bool = False
     verify: bool = Field(default=True, description="cross-check with a potential-energy minimisation")
     robot: Name = "texplor"
+
+    def request_json(self) -> dict[str, Any]:
+        return self.model_dump(mode="json")
+
+
+Pair = Annotated[list[Metres], Field(min_length=2, max_length=2)]
+AnglePair = Annotated[list[Angle], Field(min_length=2, max_length=2)]
+
+
+class ReconfigureRequest(_Strict):
+    """``POST /v1/reconfigure`` and the ``sphereplan/reconfigure`` query: roll a Spherobot (paper 004) to
+    ``goal`` with its camera point P on top (as ``sphereplan reconfigure``). Angles in radians unless
+    ``degrees``; ``map`` (a name or an inline grid) checks the swept sphere against obstacles."""
+
+    method: Literal["arc", "triangle"] = "arc"
+    start: Pair = Field(description="[x, y] m")
+    goal: Pair = Field(description="[x, y] m")
+    start_tilt: AnglePair = Field(default_factory=lambda: [0.0, 0.0], description="[θ, α] of P at the start")
+    start_spin: Angle = 0.0
+    goal_heading: Angle | None = Field(default=None, description="azimuth of body +x at the goal; none = partial")
+    alpha_final: Angle | None = Field(default=None, description="arc method: direction of the last roll")
+    radius_m: float | None = Field(default=None, gt=0, le=100)
+    roll_rate_rad_s: float | None = Field(default=None, gt=0, le=1000)
+    degrees: bool = False
+    map: Name | InlineGrid | None = None
+    allow_unknown: bool = False
+
+    def request_json(self) -> dict[str, Any]:
+        return self.model_dump(mode="json")
+
+
+class VpipRodsRequest(_Strict):
+    """``POST /v1/vpip/rods``: eq. 18 rod lengths for one VPIP plane, roll and pitch phase (paper 000), as
+    ``sphereplan vpip rods``."""
+
+    phi_vpip: Angle = Field(description="plane roll (rad, or degrees with degrees=true), > 0 lowers the left")
+    theta_vpip: Angle = Field(description="plane pitch, > 0 drives forward")
+    roll: Angle = Field(default=0.0, description="robot roll, > 0 leans left")
+    pitch_phase: Angle = Field(default=0.0, description="how far the sphere has rolled")
+    degrees: bool = False
+    robot: Name = "daedalus"
+
+    def request_json(self) -> dict[str, Any]:
+        return self.model_dump(mode="json")
+
+
+class VpipScheduleRequest(_Strict):
+    """``POST /v1/vpip/schedule``: 100 Hz VPIP angles and rod lengths along a plan (the time series
+    ``sphereplan vpip schedule --out`` writes)."""
+
+    path: PlanIn
+    robot: Name | None = Field(default=None, description="default: the plan's robot, else daedalus")
+    driver: Literal["vpip", "simple"] = "vpip"
 
     def request_json(self) -> dict[str, Any]:
         return self.model_dump(mode="json")

@@ -6,7 +6,9 @@ Key expressions (payloads are the same JSON as the HTTP API, encoding ``applicat
   with ``reply``, or the error / failed-result JSON with ``reply_err``. Queries go to the process pool:
   the callback only validates and submits, the reply is sent when the job finishes, so a slow plan
   never blocks other queries. Every query is finalised (``drop``) once answered.
-* queryable ``sphereplan/simulate`` — payload a :class:`~service.wire.SimulateRequest`, replies SIM.json.
+* queryables ``sphereplan/reconfigure`` and ``sphereplan/simulate`` — payloads a
+  :class:`~service.wire.ReconfigureRequest` / :class:`~service.wire.SimulateRequest`, replying what
+  ``/v1/reconfigure`` / ``/v1/simulate`` answer.
 * ``sphereplan/*/pose`` (a :class:`~service.wire.PoseIn`) and ``sphereplan/*/goal`` (a
   :class:`~service.wire.GoalMessage`), taken by one subscriber so that a pose published just before a
   goal is always applied first: each new goal is planned from that robot's latest pose; the
@@ -35,7 +37,7 @@ from pydantic import BaseModel, ValidationError
 
 from planner.errors import SpherePlanError
 from service.core import Outcome, PlanningService, ServiceBusy, ServiceSettings, error_outcome, outcome_of_exception
-from service.wire import GoalMessage, PlanRequest, PoseIn, SimulateRequest, describe_errors
+from service.wire import GoalMessage, PlanRequest, PoseIn, ReconfigureRequest, SimulateRequest, describe_errors
 
 log = logging.getLogger(__name__)
 
@@ -99,6 +101,7 @@ class ZenohNode:
         # one entry per queryable capability: key suffix → (request model, submit)
         self.queryables: dict[str, tuple[type[BaseModel], Callable[[Any], Future[Outcome]]]] = {
             "plan": (PlanRequest, service.submit_plan),
+            "reconfigure": (ReconfigureRequest, service.submit_reconfigure),
             "simulate": (SimulateRequest, service.submit_simulate),
         }
 

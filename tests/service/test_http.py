@@ -6,6 +6,7 @@ import asyncio
 import io
 import json
 import math
+import os
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
@@ -145,6 +146,44 @@ def test_tensegrity_static_equals_cli(client: httpx.Client, tmp_path: Path) -> N
     assert bad.status_code == 422 and bad.json()["field"] == "theta1"
     unknown = client.post("/v1/tensegrity/static", json={"theta1": 0.1, "theta2": 0.2, "robot": "nobody"})
     assert unknown.status_code == 404
+
+
+RECONFIGURE = {"start": [2.0, 2.0], "start_tilt": [30.0, 75.0], "goal": [3.5, 3.0], "degrees": True, "map": "hall"}
+
+
+def test_reconfigure_equals_cli(client: httpx.Client, server: Server, tmp_path: Path) -> None:
+    response = client.post("/v1/reconfigure", json=RECONFIGURE)
+    assert response.status_code == 200, response.text
+    out = tmp_path / "reconf.json"
+    assert cli_main(["reconfigure", "--start", "2", "2", "--start-tilt", "30", "75", "--goal", "3.5", "3",
+                     "--degrees", "--map", str(server.maps_dir / "hall.yaml"), "--out", str(out)]) == 0
+    assert strip_timing(response.json()) == strip_timing(json.loads(out.read_text()))
+    occupied = client.post("/v1/reconfigure", json={**RECONFIGURE, "goal": [5.1, 2.0]})
+    assert occupied.status_code == 422 and occupied.json()["error_code"] == 206
+    assert occupied.json()["status"] == "failed"
+    bad = client.post("/v1/reconfigure", json={**RECONFIGURE, "start_tilt": [30.0]})
+    assert bad.status_code == 422 and bad.json()["field"] == "start_tilt"
+    assert client.post("/v1/reconfigure", json={**RECONFIGURE, "method": "spiral"}).json()["field"] == "method"
+
+
+def test_vpip_rods_and_schedule_equal_cli(client: httpx.Client, tmp_path: Path,
+                                          capsys: pytest.CaptureFixture[str]) -> None:
+    rods = client.post("/v1/vpip/rods", json={"phi_vpip": 5, "theta_vpip": 10, "roll": 2, "degrees": True})
+    assert rods.status_code == 200, rods.text
+    capsys.readouterr()
+    assert cli_main(["vpip", "rods", "--phi-vpip", "5", "--theta-vpip", "10", "--roll", "2", "--degrees"]) == 0
+    assert rods.json() == json.loads(capsys.readouterr().out)
+    assert client.post("/v1/vpip/rods", json={"phi_vpip": 0.1, "theta_vpip": 0.1, "robot": "nobody"}).status_code == 404
+
+    plan = client.post("/v1/plan", json=plan_body(robot="daedalus")).json()
+    schedule = client.post("/v1/vpip/schedule", json={"path": plan})
+    assert schedule.status_code == 200, schedule.text[:300]
+    (tmp_path / "plan.json").write_text(json.dumps(plan))
+    out = tmp_path / "schedule.json"
+    assert cli_main(["vpip", "schedule", "--path", str(tmp_path / "plan.json"), "--out", str(out)]) == 0
+    assert schedule.json() == json.loads(out.read_text())
+    no_rods = client.post("/v1/vpip/schedule", json={"path": plan, "robot": "zju-60"})
+    assert no_rods.status_code == 422 and no_rods.json()["field"] == "robot"
 
 
 def _huge_grid() -> dict[str, Any]:
@@ -291,7 +330,8 @@ def test_full_pool_gives_503_and_recovers(client: httpx.Client, server: Server) 
     assert client.post("/v1/plan", json=plan_body()).status_code == 200
 
 
-FUZZ_EXAMPLES = 12  # per operation and mode: bounded so the suite stays quick
+# per operation and mode: bounded so the suite stays quick (raise it for a deeper run)
+FUZZ_EXAMPLES = int(os.environ.get("SPHEREPLAN_FUZZ_EXAMPLES", "12"))
 
 
 @pytest.mark.parametrize("mode", [GenerationMode.POSITIVE, GenerationMode.NEGATIVE])

@@ -25,6 +25,7 @@ from tests.service.service_harness import (
 )
 
 CLIENT = Path(__file__).with_name("zenoh_client.py")
+RECONFIGURE = {"start": [2.0, 2.0], "start_tilt": [30.0, 75.0], "goal": [3.5, 3.0], "degrees": True, "map": "hall"}
 
 
 @pytest.fixture(scope="session")
@@ -56,6 +57,7 @@ def query_answers(server: Server) -> list[dict[str, Any]]:
         {"queries": [{"query": "sphereplan/plan", "payload": plan_body(goal=SLOT_GOAL, time_limit_s=1.5)},
                      {"query": "sphereplan/plan", "payload": plan_body()}]},
         {"liveliness": "sphereplan/planner/**"},
+        {"query": "sphereplan/reconfigure", "payload": RECONFIGURE},
     ])
 
 
@@ -107,6 +109,13 @@ def test_slow_query_does_not_block_a_fast_one(query_answers: list[dict[str, Any]
 def test_liveliness_token_announces_the_planner(query_answers: list[dict[str, Any]]) -> None:
     tokens = query_answers[8]["tokens"]
     assert len(tokens) == 1 and tokens[0].startswith("sphereplan/planner/")
+
+
+def test_reconfigure_query_equals_http(query_answers: list[dict[str, Any]], server: Server) -> None:
+    reply = only_reply(query_answers[9])
+    assert reply["ok"] and reply["payload"]["status"] == "exact"
+    http = httpx.post(server.url + "/v1/reconfigure", json=RECONFIGURE, timeout=60).json()
+    assert strip_timing(reply["payload"]) == strip_timing(http)
 
 
 def test_simulate_query_equals_http(server: Server) -> None:
