@@ -107,6 +107,7 @@ def problem_requests(include_unsolvable: bool) -> list[dict[str, Any]]:
 async def http_load(url: str, bodies: list[dict[str, Any]], concurrency: int, duration_s: float) -> dict[str, Any]:
     """Closed loop: ``concurrency`` clients post bodies round-robin until ``duration_s`` has passed."""
     latencies: list[float] = []
+    planning: list[float] = []
     statuses: dict[int, int] = {}
     counter = iter(range(10**9))
     t0 = time.perf_counter()
@@ -119,13 +120,16 @@ async def http_load(url: str, bodies: list[dict[str, Any]], concurrency: int, du
                 response = await client.post("/v1/plan", json=body)
                 latencies.append(time.perf_counter() - start)
                 statuses[response.status_code] = statuses.get(response.status_code, 0) + 1
+                if response.status_code in (200, 422):
+                    planning.append(float(response.json().get("planning_time_s", 0.0)))
                 if response.status_code == 503:
                     await asyncio.sleep(float(response.headers.get("retry-after", "1")))
 
         await asyncio.gather(*(worker() for _ in range(concurrency)))
     elapsed = time.perf_counter() - t0
     return {"requests": len(latencies), "statuses": statuses, "elapsed_s": elapsed, "rps": len(latencies) / elapsed,
-            "p50_ms": 1000 * _percentile(latencies, 50), "p99_ms": 1000 * _percentile(latencies, 99)}
+            "p50_ms": 1000 * _percentile(latencies, 50), "p99_ms": 1000 * _percentile(latencies, 99),
+            "plan_ms": 1000 * statistics.fmean(planning) if planning else float("nan")}
 
 
 def timed(fn: Callable[[], Any], n: int) -> list[float]:
@@ -176,13 +180,14 @@ def main(argv: list[str] | None = None) -> int:
     bodies = problem_requests(args.all)
     print(f"{len(bodies)} shipped problems, {args.concurrency} concurrent clients, {args.duration:g} s per run, "
           f"{os.cpu_count()} CPUs\n")
-    print(f"{'workers':>7} {'start s':>8} {'requests':>8} {'req/s':>7} {'p50 ms':>8} {'p99 ms':>8}  statuses")
+    print(f"{'workers':>7} {'start s':>8} {'requests':>8} {'req/s':>7} {'p50 ms':>8} {'p99 ms':>8} "
+          f"{'plan ms':>8}  statuses   (plan ms: mean planning_time_s the workers report)")
     served_last = None
     for workers in args.workers:
         with serve(workers, max_in_flight=max(4 * workers, args.concurrency)) as served:
             r = asyncio.run(http_load(served.url, bodies, args.concurrency, args.duration))
             print(f"{workers:>7} {served.startup_s:>8.1f} {r['requests']:>8} {r['rps']:>7.2f} {r['p50_ms']:>8.0f} "
-                  f"{r['p99_ms']:>8.0f}  {dict(sorted(r['statuses'].items()))}", flush=True)
+                  f"{r['p99_ms']:>8.0f} {r['plan_ms']:>8.0f}  {dict(sorted(r['statuses'].items()))}", flush=True)
             if workers == args.workers[-1]:
                 served_last = round_trips(served, bodies[0], args.zenoh_queries)
     if served_last:
