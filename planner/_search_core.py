@@ -80,13 +80,13 @@ def _heuristic(htab: np.ndarray, p: np.ndarray, x: float, y: float, yaw: float) 
 
 
 @njit(cache=True)
-def _closed_key(p: np.ndarray, w: int, x: float, y: float, yaw: float, ri: int, n_roll: int) -> int:
+def _closed_key(p: np.ndarray, w: int, x: float, y: float, yaw: float, rb: int, n_rb: int) -> int:
     ix = int(math.floor((x - p[P_OX]) / p[P_RES]))
     iy = int(math.floor((y - p[P_OY]) / p[P_RES]))
     n_yaw = int(p[P_N_YAW])
     a = yaw - 2.0 * math.pi * math.floor(yaw / (2.0 * math.pi))
     yb = int(a / (2.0 * math.pi) * n_yaw) % n_yaw
-    return ((iy * w + ix) * n_yaw + yb) * n_roll + ri
+    return ((iy * w + ix) * n_yaw + yb) * n_rb + rb
 
 
 @njit(cache=True)
@@ -207,7 +207,7 @@ def shortcut(
 @njit(cache=True)
 def search_chunk(
     clear: np.ndarray, htab: np.ndarray, p: np.ndarray, offx: np.ndarray, offy: np.ndarray,
-    rolls: np.ndarray, curvs: np.ndarray,
+    rolls: np.ndarray, curvs: np.ndarray, roll_bins: np.ndarray, n_roll_bins: int,
     node_f: np.ndarray, node_i: np.ndarray,
     heap_keys: np.ndarray, heap_vals: np.ndarray, heap_size: np.ndarray,
     closed: np.ndarray, counters: np.ndarray, max_expansions: int,
@@ -232,7 +232,7 @@ def search_chunk(
             return FULL
         _, k = heap_pop(heap_keys, heap_vals, heap_size)
         x, y, yaw, roll, g = node_f[k, 0], node_f[k, 1], node_f[k, 2], node_f[k, 3], node_f[k, 4]
-        key = _closed_key(p, w, x, y, yaw, node_i[k, 1], n_roll)
+        key = _closed_key(p, w, x, y, yaw, roll_bins[node_i[k, 1]], n_roll_bins)
         if closed[key >> 3] & (1 << (key & 7)):
             continue
         closed[key >> 3] |= 1 << (key & 7)
@@ -272,7 +272,7 @@ def search_chunk(
                 cx, cy = roll_shift(x, y, yaw, radius, d_roll)
                 cx, cy, cyaw = arc_step(cx, cy, yaw, curvs[ri], direction * step)
                 cyaw = _wrap(cyaw)
-                ckey = _closed_key(p, w, cx, cy, cyaw, ri, n_roll)
+                ckey = _closed_key(p, w, cx, cy, cyaw, roll_bins[ri], n_roll_bins)
                 if closed[ckey >> 3] & (1 << (ckey & 7)):
                     continue
                 h = _heuristic(htab, p, cx, cy, cyaw)

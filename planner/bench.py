@@ -112,15 +112,21 @@ def bench_ompl(problem: Problem, grid: OccupancyGrid, robot: RobotProfile, plann
         st.setY(pose[1])
         st.setYaw(math.remainder(pose[2], 2 * math.pi) if pose[2] < math.pi else -math.pi)  # OMPL: [−π, π)
     setup.setStartAndGoalStates(start, goal, 0.1)
-    planner = og.BITstar(info) if planner_name == "BIT*" else og.RRTstar(info)
-    setup.setPlanner(planner)
     pdef = setup.getProblemDefinition()
     t0 = time.perf_counter()
-    ptc = ob.plannerOrTerminationCondition(
-        ob.timedPlannerTerminationCondition(time_s), ob.exactSolnPlannerTerminationCondition(pdef)
-    )
-    setup.solve(ptc)
-    first = time.perf_counter() - t0
+    if planner_name == "BIT*":
+        # BIT* publishes its solution only when solve() returns: ask it to return on the first one.
+        bit = og.BITstar(info)
+        bit.setStopOnSolnImprovement(True)
+        setup.setPlanner(bit)
+        setup.solve(time_s)
+        first = time.perf_counter() - t0
+        bit.setStopOnSolnImprovement(False)
+    else:
+        setup.setPlanner(og.RRTstar(info))
+        setup.solve(ob.plannerOrTerminationCondition(
+            ob.timedPlannerTerminationCondition(time_s), ob.exactSolnPlannerTerminationCondition(pdef)))
+        first = time.perf_counter() - t0
     solved = pdef.hasExactSolution()
     if solved and time_s - first > 0.05:
         setup.solve(time_s - first)

@@ -106,34 +106,34 @@ def _dijkstra16(mult: np.ndarray, gx: int, gy: int, cell_m: float) -> np.ndarray
     return dist
 
 
+def auto_downsample(shape: tuple[int, ...], max_cells: int = 50_000) -> int:
+    """Smallest factor ≥ 2 that brings a grid of ``shape`` to at most ``max_cells`` coarse cells."""
+    cells = int(shape[0]) * int(shape[1])
+    return max(2, math.ceil(math.sqrt(cells / max_cells)))
+
+
 class HolonomicHeuristic:
     """Admissible holonomic cost-to-go (m, weighted like the search's travel cost) from one goal.
 
     Parameters
     ----------
-    clearance : (H, W) conservative clearance of the fine grid (``ClearanceMap.clearance``), metres.
-    origin_xy, resolution_m : the fine grid's geometry.
+    mult : (h, w) coarse cost multipliers from :func:`coarse_cost_grid` (inf = impassable); it does not
+        depend on the goal, so a planner builds it once per map.
+    origin_xy : the grid's origin (m).
+    cell_m : coarse cell size (m) = fine resolution × downsampling factor.
     goal_xy : goal position (m).
-    centre_threshold_m : clearance the robot's centre needs in any valid pose.
-    factor : downsampling factor (1 = full resolution).
     """
 
-    def __init__(
-        self, clearance: np.ndarray, origin_xy: tuple[float, float], resolution_m: float,
-        goal_xy: tuple[float, float], centre_threshold_m: float, circle_radius_m: float,
-        prox_range_m: float, cost_penalty: float, factor: int = 2,
-    ) -> None:
-        self.factor = max(1, int(factor))
-        self.cell_m = resolution_m * self.factor
+    def __init__(self, mult: np.ndarray, origin_xy: tuple[float, float], cell_m: float,
+                 goal_xy: tuple[float, float]) -> None:
+        self.cell_m = cell_m
         self.origin_xy = origin_xy
-        mult = coarse_cost_grid(clearance, centre_threshold_m, circle_radius_m, prox_range_m, cost_penalty,
-                                self.factor)
-        gx = math.floor((goal_xy[0] - origin_xy[0]) / self.cell_m)
-        gy = math.floor((goal_xy[1] - origin_xy[1]) / self.cell_m)
-        raw = _dijkstra16(mult, gx, gy, self.cell_m)
+        gx = math.floor((goal_xy[0] - origin_xy[0]) / cell_m)
+        gy = math.floor((goal_xy[1] - origin_xy[1]) / cell_m)
+        raw = _dijkstra16(mult, gx, gy, cell_m)
         # Within one coarse cell the grid knows nothing: allow a diagonal of slack at each end, and
         # undo the 16-connected metric's overestimate of Euclidean length.
-        slack = 2.0 * math.sqrt(2.0) * self.cell_m
+        slack = 2.0 * math.sqrt(2.0) * cell_m
         self.table = np.maximum(raw / SIXTEEN_CONNECTED_RATIO - slack, 0.0)
 
     def __call__(self, x: float, y: float) -> float:

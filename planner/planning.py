@@ -10,9 +10,9 @@ from __future__ import annotations
 
 from collections import OrderedDict
 from collections.abc import Callable
+from functools import lru_cache
 from pathlib import Path
-
-import numpy as np
+from typing import TYPE_CHECKING
 
 from planner.errors import NoValidPathFound
 from planner.mapio import mesh_path_of
@@ -20,6 +20,9 @@ from planner.occupancy import OccupancyGrid
 from planner.result import PlanResult
 from planner.robot import RobotProfile
 from planner.search import HybridAStar, PlannerOptions, Pose
+
+if TYPE_CHECKING:
+    from planner.mesh_world import MeshWorld
 
 _CACHE: OrderedDict[tuple[int, str, PlannerOptions], HybridAStar] = OrderedDict()
 _CACHE_SIZE = 8
@@ -39,14 +42,19 @@ def planner_for(grid: OccupancyGrid, robot: RobotProfile, options: PlannerOption
     return planner
 
 
+@lru_cache(maxsize=4)
+def _mesh_world(path: str) -> MeshWorld:
+    from planner.mesh_world import MeshWorld
+
+    return MeshWorld.from_file(Path(path))
+
+
 def mesh_recheck(grid: OccupancyGrid, robot: RobotProfile, result: PlanResult) -> dict[str, object] | None:
     """Exact fcl check of a plan on a mesh world; None when the grid did not come from a mesh."""
     mesh = mesh_path_of(grid)
     if mesh is None:
         return None
-    from planner.mesh_world import MeshWorld
-
-    world = MeshWorld.from_file(Path(mesh))
+    world = _mesh_world(str(mesh))
     states = result.states
     collides, index, min_distance = world.path_collides(states[:, 0], states[:, 1], states[:, 2], robot)
     return {"mesh": str(mesh), "collides": bool(collides), "first_index": index,
@@ -70,7 +78,3 @@ def plan_path(
                 f"{check['first_index']} (exact fcl check); the mesh has geometry the height slice missed"
             )
     return result
-
-
-def states_array(result: PlanResult) -> np.ndarray:
-    return result.states

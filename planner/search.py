@@ -45,7 +45,7 @@ from planner.errors import (
     StartOccupied,
     StartOutsideMap,
 )
-from planner.heuristics import HolonomicHeuristic
+from planner.heuristics import HolonomicHeuristic, auto_downsample, coarse_cost_grid
 from planner.kinematics import child_pose, densify_motions, wrap_angle
 from planner.occupancy import OccupancyGrid
 from planner.result import PlanResult, build_states
@@ -61,6 +61,7 @@ class PlannerOptions:
 
     n_rolls: int = 7                  # discrete held rolls in [−φmax, φmax] (odd, ≥ 5), even in curvature
     n_yaw_bins: int = 72              # closed-set heading bins (5°)
+    n_roll_bins: int = 3              # closed-set roll bins (left/upright/right; 0 = one per held roll)
     step_m: float = 0.0               # arc length per expansion; 0 = automatic (see ``resolved_step``)
     allow_reverse: bool = False
     n_circles: int = 3                # covering circles of the footprint (paper 001 Fig. 6)
@@ -75,13 +76,14 @@ class PlannerOptions:
     proximity_range_m: float = 0.3    # proximity cost fades to 0 this far beyond the inflated obstacles
     greed: float = 1.0               # eq. 14j; 0 = admissible A* (slow: 7 rolls × 72 bins); smoothing recovers length
     analytic_ratio_m: float = 3.5     # try a Dubins shot every max(1, h / ratio) expansions
-    heuristic_downsample: int = 2
+    heuristic_downsample: int = 0     # holonomic grid coarsening; 0 = auto (≥ 2, at most ~50k coarse cells)
     time_limit_s: float = 5.0
     max_iterations: int = 2_000_000
     chunk_expansions: int = 2000
     state_spacing_m: float = 0.04     # spacing of the returned states (≤ 5 cm, DESIGN.md)
     smooth: bool = True               # shortcut the search's path with collision-checked rollable Dubins shots
     smooth_max_tries: int = 24        # candidate shortcut targets tried per path knot
+    smooth_passes: int = 1            # shortcut passes; later passes re-subdivide (≈ +1 % shorter, 2× slower)
 
     def validate(self) -> None:
         """Raise :class:`InvalidInput` naming the first bad option."""
@@ -95,6 +97,8 @@ class PlannerOptions:
                 need(math.isfinite(value), f.name, f"must be finite, got {value!r}")
         need(self.n_rolls >= 5 and self.n_rolls % 2 == 1, "n_rolls", "must be an odd number ≥ 5")
         need(8 <= self.n_yaw_bins <= 720, "n_yaw_bins", "must be in [8, 720]")
+        need(self.n_roll_bins == 0 or (3 <= self.n_roll_bins <= self.n_rolls and self.n_roll_bins % 2 == 1),
+             "n_roll_bins", "must be 0 (one per held roll) or an odd number in [3, n_rolls]")
         need(self.step_m >= 0, "step_m", "must be ≥ 0 (0 = automatic)")
         need(1 <= self.n_circles <= 16, "n_circles", "must be in [1, 16]")
         need(self.goal_tolerance_m > 0, "goal_tolerance_m", "must be > 0")
@@ -104,11 +108,12 @@ class PlannerOptions:
         for name in ("change_penalty", "switch_cost_m", "cost_penalty", "proximity_range_m", "greed"):
             need(getattr(self, name) >= 0.0, name, "must be ≥ 0")
         need(self.analytic_ratio_m > 0, "analytic_ratio_m", "must be > 0")
-        need(1 <= self.heuristic_downsample <= 8, "heuristic_downsample", "must be in [1, 8]")
+        need(0 <= self.heuristic_downsample <= 8, "heuristic_downsample", "must be in [0, 8] (0 = auto)")
         need(self.time_limit_s > 0, "time_limit_s", "must be > 0")
         need(self.max_iterations > 0, "max_iterations", "must be > 0")
         need(0 < self.state_spacing_m <= 0.05, "state_spacing_m", "must be in (0, 0.05]")
         need(1 <= self.smooth_max_tries <= 1000, "smooth_max_tries", "must be in [1, 1000]")
+        need(1 <= self.smooth_passes <= 20, "smooth_passes", "must be in [1, 20]")
 
     @classmethod
     def from_dict(cls, data: dict[str, Any]) -> PlannerOptions:
@@ -156,8 +161,22 @@ class HybridAStar:
         self.curvatures = kappas
         self.rolls = np.asarray(robot.roll_model.roll_for_curvature(kappas), dtype=float)
         self.rolls[-1], self.rolls[0] = robot.max_roll_rad, -robot.max_roll_rad
+        n_bins = self.options.n_roll_bins or self.options.n_rolls
+        # roll index → closed-set bin: equal curvature intervals, upright always in the middle bin
+        self.roll_bins = np.rint((kappas / kmax + 1.0) / 2.0 * (n_bins - 1)).astype(np.int64)
+        self.n_roll_bins = n_bins
         offsets = np.hypot(self.footprint.offsets_x, self.footprint.offsets_y)
         self.centre_threshold_m = self.footprint.radius_m - float(offsets.min()) - grid.resolution_m
+        o = self.options
+        self.heuristic_factor = o.heuristic_downsample or auto_downsample(grid.data.shape)
+        self.holonomic_mult = coarse_cost_grid(self.clearance.clearance, self.centre_threshold_m,
+                                               self.footprint.radius_m, o.proximity_range_m, o.cost_penalty,
+                                               self.heuristic_factor)
+
+    def holonomic(self, goal_xy: tuple[float, float]) -> HolonomicHeuristic:
+        """The holonomic cost-to-go table towards ``goal_xy`` (eq. 14g)."""
+        return HolonomicHeuristic(self.holonomic_mult, (self.clearance.origin_x, self.clearance.origin_y),
+                                  self.grid.resolution_m * self.heuristic_factor, goal_xy)
 
     @property
     def resolved_step_m(self) -> float:
@@ -221,11 +240,7 @@ class HybridAStar:
         goal = (float(goal[0]), float(goal[1]), float(wrap_angle(float(goal[2]))))
         self._check_endpoint(start, "start")
         self._check_endpoint(goal, "goal")
-        heur = HolonomicHeuristic(
-            self.clearance.clearance, (self.clearance.origin_x, self.clearance.origin_y), self.grid.resolution_m,
-            goal[:2], self.centre_threshold_m, self.footprint.radius_m, o.proximity_range_m, o.cost_penalty,
-            o.heuristic_downsample,
-        )
+        heur = self.holonomic(goal[:2])
         if not math.isfinite(heur(start[0], start[1])):
             raise NoValidPathFound(
                 f"no path: the goal ({goal[0]:.2f}, {goal[1]:.2f}) cannot be reached from the start "
@@ -234,7 +249,7 @@ class HybridAStar:
         p = self._params(goal)
         p[core.P_HOX], p[core.P_HOY] = heur.origin_xy
         p[core.P_HCELL] = heur.cell_m
-        n_keys = self.grid.width * self.grid.height * o.n_yaw_bins * o.n_rolls
+        n_keys = self.grid.width * self.grid.height * o.n_yaw_bins * self.n_roll_bins
         closed = np.zeros(n_keys // 8 + 1, dtype=np.uint8)
         cap = 1 << 16
         node_f = np.empty((cap, 5))
@@ -255,7 +270,8 @@ class HybridAStar:
             budget = min(o.chunk_expansions, o.max_iterations - int(counters[core.C_EXPANSIONS]))
             status = core.search_chunk(
                 self.clearance.clearance, heur.table, p, self.footprint.offsets_x, self.footprint.offsets_y,
-                self.rolls, self.curvatures, node_f, node_i, heap_keys, heap_vals, heap_size, closed, counters,
+                self.rolls, self.curvatures, self.roll_bins, self.n_roll_bins, node_f, node_i, heap_keys, heap_vals,
+                heap_size, closed, counters,
                 budget, seg_roll, seg_curv, seg_len,
             )
             if status == core.FOUND:
@@ -285,7 +301,14 @@ class HybridAStar:
         raw_length = self._length(start, motions)
         t_search = time.perf_counter() - t0
         if o.smooth:
-            motions = self._shortcut(start, motions, p, o.smooth_max_tries)
+            length = raw_length
+            for k in range(o.smooth_passes):
+                candidate = self._shortcut(start, self._subdivide(motions) if k else motions, p,
+                                           o.smooth_max_tries)
+                new_length = self._length(start, candidate)
+                if new_length > length - 1e-3:
+                    break
+                motions, length = candidate, new_length
         t_smooth = time.perf_counter() - t0 - t_search
         poses = self._densify(start, motions, o.state_spacing_m)
         fine = self._densify(start, motions, self.grid.resolution_m / 4)
@@ -327,6 +350,15 @@ class HybridAStar:
             x, y, yaw, roll = x2, y2, yaw2, held
             rows.append((x, y, yaw, roll, dist))
         return np.array(rows)
+
+    def _subdivide(self, motions: list[tuple[float, float, float]]) -> list[tuple[float, float, float]]:
+        """Split motions longer than one search step into equal pieces (more knots to shortcut from)."""
+        step = self.resolved_step_m
+        out: list[tuple[float, float, float]] = []
+        for held, curv, s in motions:
+            n = max(1, math.ceil(abs(s) / step - 1e-9))
+            out.extend([(held, curv, s / n)] * n)
+        return out
 
     def _length(self, start: Pose, motions: list[tuple[float, float, float]]) -> float:
         return float(self._knots(start, motions)[-1, 4])

@@ -4,17 +4,13 @@ import math
 
 import numpy as np
 
-from planner.heuristics import HolonomicHeuristic
 from planner.occupancy import OccupancyGrid
 from planner.robot import load_robot
 from planner.search import HybridAStar, PlannerOptions
 
 
 def _heuristic(planner, goal, opts):
-    c = planner.clearance
-    return HolonomicHeuristic(c.clearance, (c.origin_x, c.origin_y), planner.grid.resolution_m, goal,
-                              planner.centre_threshold_m, planner.footprint.radius_m, opts.proximity_range_m,
-                              opts.cost_penalty, opts.heuristic_downsample)
+    return planner.holonomic(goal)
 
 
 def test_never_exceeds_euclidean_in_open_space():

@@ -136,3 +136,20 @@ def test_options_validation():
     with pytest.raises(InvalidInput, match=r"options\.time_limit_s"):
         PlannerOptions.from_dict({"time_limit_s": -1.0})
     assert PlannerOptions.from_dict({"greed": 1}).greed == 1.0
+
+
+def test_more_smoothing_passes_never_lengthen(planner):
+    start, goal = (2, 2, 0), (18, 18, math.pi / 2)
+    one = planner.plan(start, goal)
+    three = HybridAStar(planner.grid, planner.robot, PlannerOptions(smooth_passes=3)).plan(start, goal)
+    assert three.length_m <= one.length_m + 1e-9
+    assert check_path(planner.grid, planner.robot, three.states, start, goal) == []
+
+
+def test_roll_bins_in_closed_set():
+    opts = PlannerOptions(n_rolls=7, n_roll_bins=3)
+    planner = HybridAStar(two_walls(), load_robot(), opts)
+    assert planner.roll_bins.tolist() == [0, 0, 1, 1, 1, 2, 2]
+    assert planner.roll_bins[3] == 1  # upright in the middle bin
+    with pytest.raises(InvalidInput, match=r"options\.n_roll_bins"):
+        PlannerOptions.from_dict({"n_roll_bins": 4})
