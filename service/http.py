@@ -1,0 +1,335 @@
+"""The HTTP API: a thin FastAPI adapter over :class:`service.core.PlanningService`.
+
+``create_app(settings)`` builds the app; its lifespan opens the warmed process pool and the Zenoh node
+and closes both on shutdown. One router per resource (health, plan, maps, robots). Every error is JSON
+``{error_code, error_msg, field}`` with a Nav2 code (200 = not a planning failure):
+
+=====  ==================================================================================
+400    malformed JSON, unreadable body
+404    unknown map or robot, unknown route
+413    body larger than ``settings.max_body_bytes``
+422    wrong types, unknown fields, NaN/inf, negative or too long time limits, bad options;
+       a plan that failed (start/goal outside or occupied 203–206, timeout 207, no path 208):
+       the body is then the failed-result JSON (``status: failed``) the CLI prints
+503    the pool is full (``Retry-After`` header) or the service is not ready
+=====  ==================================================================================
+
+Nothing a client sends produces a 5xx; a 500 means a bug and is logged with its traceback.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import logging
+from collections.abc import AsyncIterator
+from contextlib import asynccontextmanager
+from typing import Annotated, Any
+
+from fastapi import APIRouter, Depends, FastAPI, Request
+from fastapi import Path as PathParam
+from fastapi.exceptions import RequestValidationError
+from fastapi.responses import JSONResponse, Response
+from starlette.exceptions import HTTPException as StarletteHTTPException
+from starlette.types import ASGIApp, Message, Receive, Scope, Send
+
+from planner.errors import InvalidInput, NotFound, SpherePlanError
+from service.core import UNKNOWN_ERROR_CODE, Outcome, PlanningService, ServiceBusy, ServiceSettings
+from service.wire import (
+    NAME_PATTERN,
+    ErrorBody,
+    Health,
+    MapInfo,
+    PlanRequest,
+    PlanResultOut,
+    ReconfigureRequest,
+    RobotInfo,
+    SimulateRequest,
+    TensegrityStaticRequest,
+    VpipRodsRequest,
+    VpipScheduleRequest,
+    describe_errors,
+)
+
+log = logging.getLogger(__name__)
+
+STATUS = {"ok": 200, "bad_input": 422, "not_found": 404, "failed": 422, "busy": 503, "internal": 500}
+JSON = "application/json"
+
+
+def _error(status: int, msg: str, field: str | None = None, headers: dict[str, str] | None = None) -> JSONResponse:
+    return JSONResponse({"error_code": UNKNOWN_ERROR_CODE, "error_msg": msg, "field": field}, status, headers)
+
+
+def outcome_response(outcome: Outcome, retry_after_s: int = 1) -> Response:
+    """An :class:`Outcome` as an HTTP response; the body bytes are sent as they are."""
+    headers = {"Retry-After": str(retry_after_s)} if outcome.kind == "busy" else None
+    return Response(outcome.body, STATUS[outcome.kind], headers, media_type=JSON)
+
+
+class BodyLimit:
+    """ASGI middleware: answer 413 when a request body exceeds ``limit`` bytes (declared or streamed)."""
+
+    def __init__(self, app: ASGIApp, limit: int) -> None:
+        self.app = app
+        self.limit = limit
+
+    async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
+        if scope["type"] != "http":
+            await self.app(scope, receive, send)
+            return
+        headers = dict(scope.get("headers") or [])
+        declared = headers.get(b"content-length")
+        if declared is not None:
+            if not declared.isdigit():
+                await _error(400, "Content-Length is not a number", "content-length")(scope, receive, send)
+                return
+            if int(declared) > self.limit:
+                await self._too_large(scope, receive, send)
+                return
+        received = 0
+        started = False
+
+        async def limited_receive() -> Message:
+            nonlocal received
+            message = await receive()
+            if message["type"] == "http.request":
+                received += len(message.get("body", b""))
+                if received > self.limit:
+                    raise _TooLarge(self.limit)
+            return message
+
+        async def tracking_send(message: Message) -> None:
+            nonlocal started
+            started = started or message["type"] == "http.response.start"
+            await send(message)
+
+        try:
+            await self.app(scope, limited_receive, tracking_send)
+        except _TooLarge:
+            if not started:
+                await self._too_large(scope, receive, send)
+
+    async def _too_large(self, scope: Scope, receive: Receive, send: Send) -> None:
+        await _error(413, f"request body larger than {self.limit} bytes", "body")(scope, receive, send)
+
+
+class _TooLarge(StarletteHTTPException):
+    def __init__(self, limit: int) -> None:
+        super().__init__(413, f"request body larger than {limit} bytes")
+
+
+# -------------------------------------------------------------------------------------------- routers
+
+
+def get_service(request: Request) -> PlanningService:
+    service: PlanningService = request.app.state.service
+    return service
+
+
+Service = Annotated[PlanningService, Depends(get_service)]
+MapName = Annotated[str, PathParam(pattern=NAME_PATTERN, description="a map in the maps folder")]
+ERRORS: dict[int | str, dict[str, Any]] = {
+    code: {"model": ErrorBody, "description": text} for code, text in
+    ((400, "malformed request"), (404, "unknown map or robot"), (413, "body too large"),
+     (415, "body is not JSON"),
+     (422, "invalid request or failed plan"), (503, "busy: retry after Retry-After seconds"))
+}
+
+health = APIRouter(tags=["health"])
+
+
+@health.get("/healthz", response_model=Health)
+async def healthz(service: Service) -> dict[str, Any]:
+    """Liveness: answers as long as the event loop runs (planning happens in other processes)."""
+    return service.health()
+
+
+@health.get("/readyz", response_model=Health, responses={503: {"model": ErrorBody}})
+async def readyz(service: Service) -> Any:
+    """Readiness: 200 once the worker pool is warmed, 503 before and during shutdown."""
+    if not service.ready:
+        return _error(503, "the planner is starting or stopping", headers={"Retry-After": "1"})
+    return service.health()
+
+
+plan = APIRouter(prefix="/v1", tags=["plan"])
+
+
+@plan.post("/plan", response_model=PlanResultOut, responses=ERRORS)
+async def post_plan(body: PlanRequest, service: Service) -> Response:
+    """Plan a rollable path from ``start`` to ``goal`` on a named map (or an inline grid, at most
+    ``max_inline_cells`` cells). Answers the plan result JSON — the same object ``sphereplan plan``
+    prints. A failed plan answers 422 with the failed-result JSON and its Nav2 code."""
+    future = await asyncio.to_thread(service.submit_plan, body)
+    return outcome_response(await asyncio.wrap_future(future), service.settings.retry_after_s)
+
+
+simulate = APIRouter(prefix="/v1", tags=["simulate"])
+
+
+@simulate.post("/simulate", responses=ERRORS)
+async def post_simulate(body: SimulateRequest, service: Service) -> Response:
+    """Roll a plan (the result of ``/v1/plan``) in closed loop on a map: simulator, odometry/GNSS fusion
+    and the MPC tracker of paper 001. Answers the SIM.json object ``sphereplan simulate`` writes
+    (``trajectory``, ``estimate``, ``odometry``, ``gnss``, ``commands``, ``metrics``)."""
+    future = await asyncio.to_thread(service.submit_simulate, body)
+    return outcome_response(await asyncio.wrap_future(future), service.settings.retry_after_s)
+
+
+reconfigure = APIRouter(prefix="/v1", tags=["reconfigure"])
+
+
+@reconfigure.post("/reconfigure", responses=ERRORS)
+async def post_reconfigure(body: ReconfigureRequest, service: Service) -> Response:
+    """Spherobot reconfiguration (paper 004): reach ``goal`` with the camera point P on top (and, with
+    ``goal_heading``, a heading), proved by rolling the sphere through SO(3). What ``sphereplan
+    reconfigure`` prints; with ``map`` the swept sphere is checked against it (failures 203–206, 208)."""
+    future = await asyncio.to_thread(service.submit_reconfigure, body)
+    return outcome_response(await asyncio.wrap_future(future), service.settings.retry_after_s)
+
+
+vpip = APIRouter(prefix="/v1/vpip", tags=["vpip"])
+
+
+@vpip.post("/rods", responses=ERRORS)
+async def post_vpip_rods(body: VpipRodsRequest, service: Service) -> Response:
+    """Eq. 18 length of every rod of a rod-driven sphere (paper 000) for one VPIP plane, roll and pitch
+    phase: what ``sphereplan vpip rods`` prints."""
+    future = await asyncio.to_thread(service.submit_vpip_rods, body)
+    return outcome_response(await asyncio.wrap_future(future), service.settings.retry_after_s)
+
+
+@vpip.post("/schedule", responses=ERRORS)
+async def post_vpip_schedule(body: VpipScheduleRequest, service: Service) -> Response:
+    """The 100 Hz VPIP cascade along a plan: plane angles and rod lengths per tick, the series
+    ``sphereplan vpip schedule --out`` writes."""
+    future = await asyncio.to_thread(service.submit_vpip_schedule, body)
+    return outcome_response(await asyncio.wrap_future(future), service.settings.retry_after_s)
+
+
+tensegrity = APIRouter(prefix="/v1/tensegrity", tags=["tensegrity"])
+
+
+@tensegrity.post("/static", responses=ERRORS)
+async def post_tensegrity_static(body: TensegrityStaticRequest, service: Service) -> Response:
+    """The four hybrid static states of the TeXploR two-arc robot (paper 002) for slider angles θ1, θ2:
+    what ``sphereplan tensegrity static`` prints."""
+    future = await asyncio.to_thread(service.submit_tensegrity_static, body)
+    return outcome_response(await asyncio.wrap_future(future), service.settings.retry_after_s)
+
+
+maps = APIRouter(prefix="/v1", tags=["maps"])
+
+
+@maps.get("/maps", response_model=list[MapInfo])
+async def get_maps(service: Service) -> list[dict[str, Any]]:
+    """The maps in the maps folder (the names ``map`` may take)."""
+    return service.maps()
+
+
+@maps.get("/maps/{name}.png", response_class=Response, responses={200: {"content": {"image/png": {}}}, **ERRORS})
+async def get_map_png(name: MapName, service: Service) -> Response:
+    """The map as a greyscale PNG (free white, occupied black, unknown grey; north up)."""
+    png = await asyncio.to_thread(service.map_png, name)
+    return Response(png, media_type="image/png")
+
+
+@maps.get("/maps/{name}", response_model=MapInfo, responses=ERRORS)
+async def get_map(name: MapName, service: Service) -> dict[str, Any]:
+    """Metadata of one map: size in cells and metres, resolution, origin, blocked fraction."""
+    return await asyncio.to_thread(service.map_info, name)
+
+
+robots = APIRouter(prefix="/v1", tags=["robots"])
+
+
+@robots.get("/robots", response_model=list[RobotInfo])
+async def get_robots(service: Service) -> list[dict[str, Any]]:
+    """The built-in robot profiles (the names ``robot`` may take)."""
+    return service.robots()
+
+
+# ----------------------------------------------------------------------------------------------- app
+
+
+def install_error_handlers(app: FastAPI) -> None:
+    @app.exception_handler(RequestValidationError)
+    async def invalid(request: Request, exc: RequestValidationError) -> JSONResponse:
+        content_type = request.headers.get("content-type", "application/json").split(";")[0].strip().lower()
+        if not (content_type == JSON or content_type.endswith("+json")):
+            return _error(415, f"Content-Type must be {JSON}, got {content_type!r}", "content-type")
+        errors = list(exc.errors())
+        field, msg = describe_errors(errors)
+        malformed = any(e.get("type") == "json_invalid" for e in errors)
+        return _error(400 if malformed else 422, msg, field)
+
+    @app.exception_handler(StarletteHTTPException)
+    async def http_error(request: Request, exc: StarletteHTTPException) -> JSONResponse:
+        return _error(exc.status_code, str(exc.detail), headers=getattr(exc, "headers", None))
+
+    @app.exception_handler(ServiceBusy)
+    async def busy(request: Request, exc: ServiceBusy) -> Response:
+        return outcome_response(exc.outcome(), exc.retry_after_s)
+
+    @app.exception_handler(NotFound)
+    async def not_found(request: Request, exc: NotFound) -> JSONResponse:
+        return _error(404, str(exc), exc.field)
+
+    @app.exception_handler(InvalidInput)
+    async def bad_input(request: Request, exc: InvalidInput) -> JSONResponse:
+        return _error(422, str(exc), exc.field)
+
+    @app.exception_handler(SpherePlanError)
+    async def other(request: Request, exc: SpherePlanError) -> JSONResponse:
+        return _error(422, str(exc))
+
+    @app.exception_handler(Exception)
+    async def bug(request: Request, exc: Exception) -> JSONResponse:
+        log.exception("unhandled error on %s %s", request.method, request.url.path)
+        return JSONResponse({"error_code": UNKNOWN_ERROR_CODE, "error_msg": f"internal error: {type(exc).__name__}",
+                             "field": None}, 500)
+
+
+def create_app(settings: ServiceSettings | None = None, service: PlanningService | None = None) -> FastAPI:
+    """The HTTP app. Its lifespan starts ``service`` (default: a new :class:`PlanningService` on
+    ``settings``) and, if ``settings.zenoh``, the Zenoh node; both are closed on shutdown."""
+    settings = settings or (service.settings if service else ServiceSettings())
+    svc = service or PlanningService(settings)
+
+    @asynccontextmanager
+    async def lifespan(app: FastAPI) -> AsyncIterator[None]:
+        node = None
+        await asyncio.to_thread(svc.start)
+        try:
+            if settings.zenoh:
+                from service.zenoh_node import ZenohNode
+
+                node = ZenohNode(svc, settings)
+                await asyncio.to_thread(node.start)
+            log.info("sphereplan service ready (%d workers, warm-up %.1f s)", settings.workers, svc.warm_up_s)
+            yield
+        finally:
+            if node is not None:
+                await asyncio.to_thread(node.close)
+            await asyncio.to_thread(svc.close)
+
+    app = FastAPI(
+        title="sphereplan",
+        version="0.1.0",
+        summary="Motion planning for spherical rolling robots",
+        description="Plans paths a spherical robot can roll (spherical Hybrid A*). The same request and "
+                    "result JSON as the `sphereplan` CLI and the Zenoh node.",
+        lifespan=lifespan,
+    )
+    app.state.service = svc
+    app.include_router(health)
+    app.include_router(plan)
+    app.include_router(simulate)
+    app.include_router(reconfigure)
+    app.include_router(vpip)
+    app.include_router(tensegrity)
+    app.include_router(maps)
+    app.include_router(robots)
+    install_error_handlers(app)
+    app.add_middleware(BodyLimit, limit=settings.max_body_bytes)
+    return app

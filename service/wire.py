@@ -1,0 +1,330 @@
+"""Wire models: the JSON requests the HTTP API and the Zenoh node accept, as strict Pydantic models.
+
+They are kept apart from the planner's own types (``planner/`` never imports pydantic). Every request
+model forbids unknown fields, rejects wrong types (no "1" for 1, no true for 1) and NaN/±inf, and
+bounds sizes, so a bad request is rejected before it reaches a worker process. Poses are in the
+``map`` frame (metres, radians, yaw counter-clockwise). Response bodies are the plan result JSON of
+DESIGN.md; their models here only document them in the OpenAPI schema (extra keys allowed).
+
+Map and robot names are plain names (letters, digits, ``_``, ``-``, ``.``; no ``/``, no leading dot):
+they are looked up in the maps folder listing and the built-in profiles, never joined onto a path.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from collections.abc import Sequence
+from typing import Annotated, Any, Literal
+
+from pydantic import BaseModel, ConfigDict, Field, model_validator
+
+#: largest inline grid accepted by ``POST /v1/plan`` (cells); also capped by the HTTP body limit
+MAX_INLINE_CELLS = 250_000
+#: largest time limit a request may ask for (s); a server may set a lower one
+MAX_TIME_LIMIT_S = 60.0
+
+#: longest plan ``/v1/simulate`` accepts (states; 20 000 × 4 cm = 800 m)
+MAX_PLAN_STATES = 20_000
+#: longest path (m, along the states) ``/v1/simulate`` and ``/v1/vpip/schedule`` roll
+MAX_PLAN_LENGTH_M = 200.0
+#: longest simulated time ``/v1/simulate`` accepts (s)
+MAX_SIM_TIME_S = 3600.0
+
+#: largest |coordinate| accepted (m) and largest |angle| (rad or degrees)
+MAX_COORDINATE_M = 1e6
+MAX_ANGLE = 1e4
+
+NAME_PATTERN = r"^[A-Za-z0-9_-][A-Za-z0-9_.-]{0,63}$"
+
+Name = Annotated[str, Field(pattern=NAME_PATTERN, description="a plain name: no '/', no leading '.'")]
+#: a position (m): bounded so that no computation meets absurd magnitudes
+Metres = Annotated[float, Field(ge=-MAX_COORDINATE_M, le=MAX_COORDINATE_M, description="m")]
+#: an angle (rad, or degrees where the request says so)
+Angle = Annotated[float, Field(ge=-MAX_ANGLE, le=MAX_ANGLE)]
+
+
+class _Strict(BaseModel):
+    model_config = ConfigDict(extra="forbid", strict=True, allow_inf_nan=False, frozen=True)
+
+
+class PoseIn(_Strict):
+    """A planar pose in the ``map`` frame."""
+
+    x: Metres
+    y: Metres
+    yaw: Angle = Field(description="rad, counter-clockwise from +x")
+
+    def as_tuple(self) -> tuple[float, float, float]:
+        return float(self.x), float(self.y), float(self.yaw)
+
+
+class InlineGrid(_Strict):
+    """An occupancy grid sent inline: ``data[iy][ix]`` in 0..100 (percent) or −1 (unknown), row 0 at
+    the BOTTOM (y = origin y), as ``nav_msgs/OccupancyGrid``; at most ``MAX_INLINE_CELLS`` cells."""
+
+    data: list[list[Annotated[int, Field(ge=-1, le=100)]]] = Field(min_length=1)
+    resolution_m: float = Field(ge=0.001, le=100)
+    origin: list[Metres] = Field(default_factory=lambda: [0.0, 0.0, 0.0], min_length=3, max_length=3,
+                                 description="[x m, y m, yaw rad] of the lower-left corner of cell (0, 0)")
+    name: Name = "inline"
+
+    @model_validator(mode="after")
+    def _rectangular(self) -> InlineGrid:
+        width = len(self.data[0])
+        if width == 0 or any(len(row) != width for row in self.data):
+            raise ValueError("data must be a non-empty rectangular list of rows")
+        if width * len(self.data) > MAX_INLINE_CELLS:
+            raise ValueError(f"data has {width * len(self.data)} cells; at most {MAX_INLINE_CELLS} are accepted")
+        return self
+
+
+OptionValue = bool | int | float
+
+
+class PlanRequest(_Strict):
+    """``POST /v1/plan`` and the ``sphereplan/plan`` query: plan from ``start`` to ``goal``."""
+
+    map: Name | InlineGrid = Field(description="name of a map in the maps folder (GET /v1/maps), or an inline grid")
+    start: PoseIn
+    goal: PoseIn
+    robot: Name | None = Field(default=None, description="built-in profile name (GET /v1/robots); default zju-60")
+    time_limit_s: float | None = Field(default=None, gt=0, le=MAX_TIME_LIMIT_S, description="s; default 5")
+    options: dict[Annotated[str, Field(max_length=64)], OptionValue] | None = Field(
+        default=None, max_length=64, description="planner options (PlannerOptions field names)"
+    )
+
+    def request_json(self) -> dict[str, Any]:
+        """The request as plain JSON data (what crosses into a worker process)."""
+        return self.model_dump(mode="json")
+
+
+class GoalMessage(_Strict):
+    """Payload of ``sphereplan/<robot_id>/goal``: plan from the robot's latest pose to ``goal``."""
+
+    map: Name | InlineGrid
+    goal: PoseIn
+    robot: Name | None = None
+    time_limit_s: float | None = Field(default=None, gt=0, le=MAX_TIME_LIMIT_S)
+    options: dict[Annotated[str, Field(max_length=64)], OptionValue] | None = Field(default=None, max_length=64)
+
+    def plan_request(self, start: PoseIn) -> PlanRequest:
+        return PlanRequest(map=self.map, start=start, goal=self.goal, robot=self.robot,
+                           time_limit_s=self.time_limit_s, options=self.options)
+
+
+class StateIn(_Strict):
+    """One row of a plan's ``states`` (DESIGN.md): SI units, radians."""
+
+    x: Metres
+    y: Metres
+    yaw: Angle
+    roll: Angle
+    v: Metres
+    t: Metres
+    s: Metres
+    curvature: Metres
+
+
+class RobotRef(BaseModel):
+    model_config = ConfigDict(extra="allow", strict=True)
+
+    name: Name
+
+
+class PlanIn(BaseModel):
+    """A plan result as ``/v1/plan`` returns it; only ``states`` (and ``robot.name``) are read, other keys
+    are accepted and ignored."""
+
+    model_config = ConfigDict(extra="allow", strict=True, allow_inf_nan=False)
+
+    states: list[StateIn] = Field(min_length=2, max_length=MAX_PLAN_STATES)
+    robot: RobotRef | None = None
+
+    @model_validator(mode="after")
+    def _not_too_long(self) -> PlanIn:
+        length = sum(math.hypot(b.x - a.x, b.y - a.y) for a, b in zip(self.states, self.states[1:], strict=False))
+        if length > MAX_PLAN_LENGTH_M:
+            raise ValueError(f"states span {length:.0f} m; at most {MAX_PLAN_LENGTH_M:g} m are simulated here")
+        return self
+
+
+class SimulateRequest(_Strict):
+    """``POST /v1/simulate`` and the ``sphereplan/simulate`` query: roll ``path`` (a plan result) in
+    closed loop on ``map``, as ``sphereplan simulate --map M --path PLAN.json`` does."""
+
+    map: Name | InlineGrid
+    path: PlanIn
+    robot: Name | None = Field(default=None, description="default: the plan's robot")
+    seed: int = Field(default=0, ge=0, le=2**32 - 1, description="seeds every disturbance")
+    noise: Literal["none", "default"] = "default"
+    tracker: Literal["mpc", "pursuit"] = "mpc"
+    rate_hz: float = Field(default=50.0, ge=1, le=200, description="control rate")
+    horizon: int = Field(default=15, ge=1, le=100, description="MPC horizon (steps)")
+    time_limit_s: float | None = Field(default=None, gt=0, le=MAX_SIM_TIME_S,
+                                       description="simulated seconds (default 2 × rolling time + 20 s)")
+
+    def request_json(self) -> dict[str, Any]:
+        return self.model_dump(mode="json")
+
+
+class TensegrityStaticRequest(_Strict):
+    """``POST /v1/tensegrity/static``: the four hybrid static states of TeXploR for slider angles θ1, θ2
+    (as ``sphereplan tensegrity static``)."""
+
+    theta1: Angle = Field(description="slider 1 angle (rad, or degrees with degrees=true)")
+    theta2: Angle = Field(description="slider 2 angle (rad, or degrees with degrees=true)")
+    degrees: bool = False
+    verify: bool = Field(default=True, description="cross-check with a potential-energy minimisation")
+    robot: Name = "texplor"
+
+    def request_json(self) -> dict[str, Any]:
+        return self.model_dump(mode="json")
+
+
+Pair = Annotated[list[Metres], Field(min_length=2, max_length=2)]
+AnglePair = Annotated[list[Angle], Field(min_length=2, max_length=2)]
+
+
+class ReconfigureRequest(_Strict):
+    """``POST /v1/reconfigure`` and the ``sphereplan/reconfigure`` query: roll a Spherobot (paper 004) to
+    ``goal`` with its camera point P on top (as ``sphereplan reconfigure``). Angles in radians unless
+    ``degrees``; ``map`` (a name or an inline grid) checks the swept sphere against obstacles."""
+
+    method: Literal["arc", "triangle"] = "arc"
+    start: Pair = Field(description="[x, y] m")
+    goal: Pair = Field(description="[x, y] m")
+    start_tilt: AnglePair = Field(default_factory=lambda: [0.0, 0.0], description="[θ, α] of P at the start")
+    start_spin: Angle = 0.0
+    goal_heading: Angle | None = Field(default=None, description="azimuth of body +x at the goal; none = partial")
+    alpha_final: Angle | None = Field(default=None, description="arc method: direction of the last roll")
+    radius_m: float | None = Field(default=None, gt=0, le=100)
+    roll_rate_rad_s: float | None = Field(default=None, gt=0, le=1000)
+    degrees: bool = False
+    map: Name | InlineGrid | None = None
+    allow_unknown: bool = False
+
+    def request_json(self) -> dict[str, Any]:
+        return self.model_dump(mode="json")
+
+
+class VpipRodsRequest(_Strict):
+    """``POST /v1/vpip/rods``: eq. 18 rod lengths for one VPIP plane, roll and pitch phase (paper 000), as
+    ``sphereplan vpip rods``."""
+
+    phi_vpip: Angle = Field(description="plane roll (rad, or degrees with degrees=true), > 0 lowers the left")
+    theta_vpip: Angle = Field(description="plane pitch, > 0 drives forward")
+    roll: Angle = Field(default=0.0, description="robot roll, > 0 leans left")
+    pitch_phase: Angle = Field(default=0.0, description="how far the sphere has rolled")
+    degrees: bool = False
+    robot: Name = "daedalus"
+
+    def request_json(self) -> dict[str, Any]:
+        return self.model_dump(mode="json")
+
+
+class VpipScheduleRequest(_Strict):
+    """``POST /v1/vpip/schedule``: 100 Hz VPIP angles and rod lengths along a plan (the time series
+    ``sphereplan vpip schedule --out`` writes)."""
+
+    path: PlanIn
+    robot: Name | None = Field(default=None, description="default: the plan's robot, else daedalus")
+    driver: Literal["vpip", "simple"] = "vpip"
+
+    def request_json(self) -> dict[str, Any]:
+        return self.model_dump(mode="json")
+
+
+# ------------------------------------------------------------------------------------ response documentation
+
+
+class _Open(BaseModel):
+    model_config = ConfigDict(extra="allow")
+
+
+class ErrorBody(_Open):
+    """Every error: a Nav2 ``ComputePathToPose`` code (200 = unknown/other for non-planning errors) and a
+    sentence; ``field`` names the offending request field when there is one. A failed plan (422) carries
+    the whole failed-result JSON (``status: failed``), which has these two keys too."""
+
+    error_code: int
+    error_msg: str
+    field: str | None = None
+
+
+class StateOut(_Open):
+    x: float
+    y: float
+    yaw: float
+    roll: float
+    v: float
+    t: float
+    s: float
+    curvature: float
+
+
+class PlanResultOut(_Open):
+    """The plan result JSON of DESIGN.md (the CLI prints the same object)."""
+
+    status: str
+    error_code: int
+    error_msg: str
+    planning_time_s: float
+    length_m: float
+    expansions: int
+    robot: dict[str, Any] | None
+    states: list[StateOut]
+    path: dict[str, Any]
+
+
+class MapInfo(_Open):
+    name: str
+    file: str
+    kind: str
+
+
+class RobotInfo(_Open):
+    name: str
+    radius_m: float
+    max_roll_rad: float
+
+
+class Health(_Open):
+    status: str
+
+
+# ------------------------------------------------------------------------------------------ error messages
+
+# pydantic puts union branch tags ("constrained-str", "InlineGrid", "float" ...) into error locations
+_UNION_TAG = re.compile(r"^(bool|int|float|str|constrained-\w+|function-\w+\[.*\]|[A-Z]\w*|(list|tuple|dict)\[.*\])$")
+_WRONG_TYPE = {"string_type", "dict_type", "model_type", "model_attributes_type", "bool_type", "int_type",
+               "float_type", "list_type", "bool_parsing", "int_from_float"}
+
+
+def field_name(loc: Sequence[int | str]) -> str:
+    """Dotted field name of a pydantic error location (``start.x``, ``map.data[3][1]``), union tags dropped."""
+    out = ""
+    for part in loc:
+        if isinstance(part, int):
+            out += f"[{part}]"
+        elif not _UNION_TAG.match(part) and part != "body":
+            out += f".{part}" if out else part
+    return out or "body"
+
+
+def describe_errors(errors: Sequence[Any]) -> tuple[str, str]:
+    """(field, sentence) for a list of pydantic error dicts: the most specific error first.
+
+    Errors saying "wrong type" for one branch of a union are only reported when nothing more specific
+    was found (``map: "../x"`` reports the name pattern, not "should be an object").
+    """
+    specific = [e for e in errors if e.get("type") not in _WRONG_TYPE] or list(errors)
+    first = max(specific, key=lambda e: len(e.get("loc", ())))
+    if first.get("type") == "json_invalid":
+        loc = first.get("loc", ())
+        where = f" at character {loc[-1]}" if loc and isinstance(loc[-1], int) else ""
+        return "body", f"body: malformed JSON{where}: {(first.get('ctx') or {}).get('error', first.get('msg'))}"
+    field = field_name(first.get("loc", ()))
+    msg = str(first.get("msg", "invalid value"))
+    others = len({f for f in (field_name(e.get("loc", ())) for e in errors) if not field.startswith(f)})
+    return field, f"{field}: {msg}" + (f" (and {others} more field(s))" if others else "")

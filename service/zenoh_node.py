@@ -1,0 +1,248 @@
+"""The Zenoh node: queryables and pub/sub over :class:`service.core.PlanningService`.
+
+Key expressions (payloads are the same JSON as the HTTP API, encoding ``application/json``):
+
+* queryable ``sphereplan/plan`` — payload a :class:`~service.wire.PlanRequest`; replies the plan result
+  with ``reply``, or the error / failed-result JSON with ``reply_err``. Queries go to the process pool:
+  the callback only validates and submits, the reply is sent when the job finishes, so a slow plan
+  never blocks other queries. Every query is finalised (``drop``) once answered.
+* queryables ``sphereplan/reconfigure`` and ``sphereplan/simulate`` — payloads a
+  :class:`~service.wire.ReconfigureRequest` / :class:`~service.wire.SimulateRequest`, replying what
+  ``/v1/reconfigure`` / ``/v1/simulate`` answer.
+* ``sphereplan/*/pose`` (a :class:`~service.wire.PoseIn`) and ``sphereplan/*/goal`` (a
+  :class:`~service.wire.GoalMessage`), taken by one subscriber so that a pose published just before a
+  goal is always applied first: each new goal is planned from that robot's latest pose; the
+  service publishes the plan result on ``sphereplan/<robot_id>/path`` and ``{robot_id, goal_id, state,
+  error_code, error_msg, ...}`` on ``sphereplan/<robot_id>/status`` (``planning``, then ``succeeded``
+  or ``failed``). A goal superseded by a newer one before its plan finished publishes nothing more.
+* a liveliness token ``sphereplan/planner/<zid>`` announces the planner while it runs.
+
+Default session: peer mode, listening on ``tcp/127.0.0.1:7447`` only, multicast scouting off, so the
+node is reachable from this machine and nothing else. A standard Zenoh config file (``--zenoh-config``)
+replaces that for router or multi-host deployments. ``close()`` undeclares everything and closes the
+session: a live session keeps callback threads that would keep the process alive.
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+import threading
+from collections.abc import Callable
+from concurrent.futures import Future
+from typing import Any, TypeVar
+
+import zenoh
+from pydantic import BaseModel, ValidationError
+
+from planner.errors import SpherePlanError
+from service.core import Outcome, PlanningService, ServiceBusy, ServiceSettings, error_outcome, outcome_of_exception
+from service.wire import GoalMessage, PlanRequest, PoseIn, ReconfigureRequest, SimulateRequest, describe_errors
+
+log = logging.getLogger(__name__)
+
+PREFIX = "sphereplan"
+JSON = zenoh.Encoding.APPLICATION_JSON
+M = TypeVar("M", bound=BaseModel)
+
+
+def default_config(listen: str = "tcp/127.0.0.1:7447") -> zenoh.Config:
+    """Peer mode, listening on ``listen`` only, no multicast scouting, no outgoing connections."""
+    conf = zenoh.Config()
+    conf.insert_json5("mode", json.dumps("peer"))
+    conf.insert_json5("listen/endpoints", json.dumps([listen]))
+    conf.insert_json5("connect/endpoints", "[]")
+    conf.insert_json5("scouting/multicast/enabled", "false")
+    return conf
+
+
+def node_config(settings: ServiceSettings) -> zenoh.Config:
+    """The session config: ``settings.zenoh_config`` (a standard Zenoh JSON5 file) or the default."""
+    if settings.zenoh_config is not None:
+        return zenoh.Config.from_file(str(settings.zenoh_config))
+    return default_config(settings.zenoh_listen)
+
+
+def parse(model: type[M], payload: zenoh.ZBytes | None) -> M:
+    """Validate a JSON payload against a wire model; raises :class:`_BadPayload` with the error outcome."""
+    if payload is None:
+        raise _BadPayload(error_outcome("bad_input", "body: a JSON payload is required", "body"))
+    try:
+        data = json.loads(payload.to_bytes())
+    except (UnicodeDecodeError, json.JSONDecodeError) as exc:
+        raise _BadPayload(error_outcome("bad_input", f"body: malformed JSON: {exc}", "body")) from None
+    try:
+        return model.model_validate(data)
+    except ValidationError as exc:
+        field, msg = describe_errors(exc.errors())
+        raise _BadPayload(error_outcome("bad_input", msg, field)) from None
+
+
+class _BadPayload(Exception):
+    def __init__(self, outcome: Outcome) -> None:
+        super().__init__(outcome.body.decode())
+        self.outcome = outcome
+
+
+class ZenohNode:
+    """The service's Zenoh face. ``start()`` opens the session and declares everything; ``close()``
+    undeclares and closes it."""
+
+    def __init__(self, service: PlanningService, settings: ServiceSettings | None = None,
+                 config: zenoh.Config | None = None) -> None:
+        self.service = service
+        self.settings = settings or service.settings
+        self._config = config
+        self.session: zenoh.Session | None = None
+        self._entities: list[Any] = []
+        self._lock = threading.Lock()
+        self._poses: dict[str, PoseIn] = {}
+        self._goal_ids: dict[str, int] = {}
+        # one entry per queryable capability: key suffix → (request model, submit)
+        self.queryables: dict[str, tuple[type[BaseModel], Callable[[Any], Future[Outcome]]]] = {
+            "plan": (PlanRequest, service.submit_plan),
+            "reconfigure": (ReconfigureRequest, service.submit_reconfigure),
+            "simulate": (SimulateRequest, service.submit_simulate),
+        }
+
+    # ------------------------------------------------------------------------------ life cycle
+
+    def start(self) -> None:
+        session = zenoh.open(self._config or node_config(self.settings))
+        self.session = session
+        for name, (model, submit) in self.queryables.items():
+            key = f"{PREFIX}/{name}"
+            self._entities.append(session.declare_queryable(key, self._query_handler(key, model, submit)))
+        # one subscriber for both topics, so that a pose published just before a goal is seen first
+        # (callbacks of separate subscribers run on separate threads); our own puts are not delivered
+        self._entities.append(session.declare_subscriber(f"{PREFIX}/*/*", self._on_robot_sample,
+                                                         allowed_origin=zenoh.Locality.REMOTE))
+        self._entities.append(session.liveliness().declare_token(f"{PREFIX}/planner/{session.zid()}"))
+        log.info("zenoh node %s up: queryables %s", session.zid(), ", ".join(self.queryables))
+
+    def close(self) -> None:
+        session, self.session = self.session, None
+        if session is None:
+            return
+        for entity in reversed(self._entities):
+            try:
+                entity.undeclare()
+            except zenoh.ZError as exc:
+                log.debug("undeclare: %s", exc)
+        self._entities.clear()
+        session.close()
+
+    # ------------------------------------------------------------------------------ queries
+
+    def _query_handler(self, key: str, model: type[BaseModel],
+                       submit: Callable[[Any], Future[Outcome]]) -> Callable[[zenoh.Query], None]:
+        def on_query(query: zenoh.Query) -> None:
+            try:
+                future = submit(parse(model, query.payload))
+            except _BadPayload as exc:
+                self._answer(query, key, exc.outcome)
+                return
+            except ServiceBusy as exc:
+                self._answer(query, key, exc.outcome())
+                return
+            except SpherePlanError as exc:
+                self._answer(query, key, outcome_of_exception(exc))
+                return
+            except Exception as exc:
+                log.exception("query on %s failed", key)
+                self._answer(query, key, outcome_of_exception(exc))
+                return
+            future.add_done_callback(lambda done: self._answer(query, key, done.result()))
+
+        return on_query
+
+    def _answer(self, query: zenoh.Query, key: str, outcome: Outcome) -> None:
+        """Reply (or reply_err) and finalise the query, whatever happens."""
+        try:
+            if outcome.ok:
+                query.reply(key, outcome.body, encoding=JSON)
+            else:
+                query.reply_err(outcome.body, encoding=JSON)
+        except Exception as exc:  # the session may be closing
+            log.warning("could not answer a query on %s: %s", key, exc)
+        finally:
+            try:
+                query.drop()
+            except Exception as exc:
+                log.debug("query drop: %s", exc)
+
+    # ------------------------------------------------------------------------------ pub/sub
+
+    @staticmethod
+    def _robot_id(sample: zenoh.Sample) -> str:
+        return str(sample.key_expr).split("/")[1]
+
+    def _publish(self, robot_id: str, topic: str, data: dict[str, Any] | bytes) -> None:
+        session = self.session
+        if session is None:
+            return
+        payload = data if isinstance(data, bytes) else json.dumps(data, allow_nan=False).encode()
+        try:
+            session.put(f"{PREFIX}/{robot_id}/{topic}", payload, encoding=JSON)
+        except Exception as exc:  # closing
+            log.warning("could not publish %s/%s: %s", robot_id, topic, exc)
+
+    def _status(self, robot_id: str, goal_id: int, state: str, outcome: Outcome | None = None,
+                **extra: Any) -> None:
+        status: dict[str, Any] = {"robot_id": robot_id, "goal_id": goal_id, "state": state,
+                                  "error_code": 0, "error_msg": ""}
+        if outcome is not None and not outcome.ok:
+            body = outcome.json()
+            status.update(error_code=body.get("error_code", 200), error_msg=body.get("error_msg", ""))
+        status.update(extra)
+        self._publish(robot_id, "status", status)
+
+    def _on_robot_sample(self, sample: zenoh.Sample) -> None:
+        topic = str(sample.key_expr).rsplit("/", 1)[-1]
+        if topic == "pose":
+            self._on_pose(sample)
+        elif topic == "goal":
+            self._on_goal(sample)
+
+    def _on_pose(self, sample: zenoh.Sample) -> None:
+        robot_id = self._robot_id(sample)
+        try:
+            pose = parse(PoseIn, sample.payload)
+        except _BadPayload as exc:
+            self._status(robot_id, self._goal_ids.get(robot_id, 0), "invalid_pose", exc.outcome)
+            return
+        with self._lock:
+            self._poses[robot_id] = pose
+
+    def _on_goal(self, sample: zenoh.Sample) -> None:
+        robot_id = self._robot_id(sample)
+        with self._lock:
+            goal_id = self._goal_ids.get(robot_id, 0) + 1
+            self._goal_ids[robot_id] = goal_id
+            pose = self._poses.get(robot_id)
+        try:
+            goal = parse(GoalMessage, sample.payload)
+            if pose is None:
+                raise _BadPayload(error_outcome(
+                    "bad_input", f"no pose received yet on {PREFIX}/{robot_id}/pose to plan from", "pose", 203))
+            future = self.service.submit_plan(goal.plan_request(pose))
+        except _BadPayload as exc:
+            self._status(robot_id, goal_id, "failed", exc.outcome)
+            return
+        except ServiceBusy as exc:
+            self._status(robot_id, goal_id, "failed", exc.outcome())
+            return
+        except SpherePlanError as exc:
+            self._status(robot_id, goal_id, "failed", outcome_of_exception(exc))
+            return
+        self._status(robot_id, goal_id, "planning", start=pose.model_dump(), goal=goal.goal.model_dump())
+        future.add_done_callback(lambda done: self._goal_done(robot_id, goal_id, done.result()))
+
+    def _goal_done(self, robot_id: str, goal_id: int, outcome: Outcome) -> None:
+        if self._goal_ids.get(robot_id) != goal_id:
+            return  # a newer goal superseded this one
+        if outcome.ok:
+            self._publish(robot_id, "path", outcome.body)
+            self._status(robot_id, goal_id, "succeeded", length_m=outcome.json().get("length_m"))
+        else:
+            self._status(robot_id, goal_id, "failed", outcome)

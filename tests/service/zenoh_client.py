@@ -1,0 +1,132 @@
+"""A Zenoh client run as a separate process by the service tests (and usable by hand).
+
+    python tests/service/zenoh_client.py ENDPOINT < steps.json > answers.json
+
+``steps`` is a JSON list; each step is one of
+  {"query": KEY, "payload": JSON or raw string, "timeout_s": S}  -> {"replies": [{"ok", "encoding", "payload"}]}
+  {"queries": [{"query": KEY, "payload": ...}, ...]}              -> {"replies": [...], "order": [i, ...]}
+                                                                     (sent together; ``order`` = the query
+                                                                     indices in the order they were answered)
+  {"put": KEY, "payload": JSON}                                    -> {}
+  {"subscribe": KEY_EXPR}                                          -> {} (samples are collected from then on)
+  {"wait": KEY_SUFFIX, "until": {field: value}, "timeout_s": S}   -> {"samples": [...]} (stops at the first
+                                                                     sample on a key ending in KEY_SUFFIX whose
+                                                                     payload has those fields)
+  {"liveliness": KEY_EXPR}                                         -> {"tokens": [key, ...]}
+  {"sleep": S}                                                     -> {}
+and the answers (one per step) are printed as a JSON list. The client connects in client mode to
+ENDPOINT only, with multicast scouting off.
+"""
+
+from __future__ import annotations
+
+import json
+import sys
+import threading
+import time
+from collections.abc import Callable
+from typing import Any
+
+import zenoh
+
+
+def _decode(payload: zenoh.ZBytes | None) -> Any:
+    if payload is None:
+        return None
+    text = payload.to_bytes().decode()
+    try:
+        return json.loads(text)
+    except json.JSONDecodeError:
+        return text
+
+
+def _reply(reply: zenoh.Reply) -> dict[str, Any]:
+    sample = reply.ok if reply.ok is not None else reply.err
+    assert sample is not None
+    return {"ok": reply.ok is not None, "encoding": str(sample.encoding), "payload": _decode(sample.payload)}
+
+
+def _encode(payload: Any) -> bytes:
+    return payload.encode() if isinstance(payload, str) else json.dumps(payload).encode()
+
+
+def _concurrent_queries(session: zenoh.Session, queries: list[dict[str, Any]]) -> dict[str, Any]:
+    done = threading.Semaphore(0)
+    got: list[dict[str, Any] | None] = [None] * len(queries)
+    order: list[int] = []
+
+    def on_reply(index: int) -> Callable[[zenoh.Reply], None]:
+        def record(reply: zenoh.Reply) -> None:
+            got[index] = _reply(reply)
+            order.append(index)
+
+        return record
+
+    for i, query in enumerate(queries):
+        session.get(query["query"], zenoh.handlers.Callback(on_reply(i), done.release),
+                    payload=_encode(query["payload"]), timeout=float(query.get("timeout_s", 30)))
+    for _ in queries:
+        done.acquire(timeout=60)
+    return {"replies": got, "order": order}
+
+
+def _wait(samples: list[tuple[str, Any]], arrived: threading.Condition, suffix: str, want: dict[str, Any],
+          timeout_s: float) -> dict[str, Any]:
+    deadline = time.monotonic() + timeout_s
+
+    def matched() -> bool:
+        return any(key.endswith(suffix) and isinstance(data, dict) and all(data.get(k) == v for k, v in want.items())
+                   for key, data in samples)
+
+    with arrived:
+        while not matched() and time.monotonic() < deadline:
+            arrived.wait(timeout=0.1)
+        return {"samples": [{"key": k, "payload": d} for k, d in samples]}
+
+
+def run(endpoint: str, steps: list[dict[str, Any]]) -> list[dict[str, Any]]:
+    conf = zenoh.Config()
+    conf.insert_json5("mode", '"client"')
+    conf.insert_json5("connect/endpoints", json.dumps([endpoint]))
+    conf.insert_json5("scouting/multicast/enabled", "false")
+    samples: list[tuple[str, Any]] = []
+    arrived = threading.Condition()
+
+    def on_sample(sample: zenoh.Sample) -> None:
+        with arrived:
+            samples.append((str(sample.key_expr), _decode(sample.payload)))
+            arrived.notify_all()
+
+    answers: list[dict[str, Any]] = []
+    subscribers = []
+    with zenoh.open(conf) as session:
+        for step in steps:
+            if "query" in step:
+                replies = [_reply(reply) for reply in session.get(
+                    step["query"], payload=_encode(step["payload"]), timeout=float(step.get("timeout_s", 30)))]
+                answers.append({"replies": replies})
+            elif "queries" in step:
+                answers.append(_concurrent_queries(session, step["queries"]))
+            elif "put" in step:
+                session.put(step["put"], _encode(step["payload"]), encoding=zenoh.Encoding.APPLICATION_JSON)
+                answers.append({})
+            elif "subscribe" in step:
+                subscribers.append(session.declare_subscriber(step["subscribe"], on_sample))
+                answers.append({})
+            elif "wait" in step:
+                answers.append(_wait(samples, arrived, step["wait"], step.get("until", {}),
+                                     float(step.get("timeout_s", 30))))
+            elif "liveliness" in step:
+                tokens = [str(r.ok.key_expr) for r in session.liveliness().get(step["liveliness"], timeout=5)
+                          if r.ok is not None]
+                answers.append({"tokens": tokens})
+            elif "sleep" in step:
+                time.sleep(float(step["sleep"]))
+                answers.append({})
+        for subscriber in subscribers:
+            subscriber.undeclare()
+    return answers
+
+
+if __name__ == "__main__":
+    json.dump(run(sys.argv[1], json.load(sys.stdin)), sys.stdout)
