@@ -4,6 +4,8 @@
 rolls sideways to change its roll), t (s), s (distance travelled by the centre, m, sideways shifts
 included) and curvature (dyaw/ds of the held roll, 1/m, sign flipped when reversing).
 ``path`` mirrors ``nav_msgs/Path`` in the ``map`` frame (orientation = yaw only).
+``min_clearance_m`` is the smallest exact distance from a footprint circle to a blocked cell, minus the
+circle radius, along the path (capped at 1 m: open space reads 1.0).
 """
 
 from __future__ import annotations

@@ -222,10 +222,9 @@ class HybridAStar:
         margin = self.pose_margin(pose)
         if margin < 0:
             cls2 = StartOccupied if which == "start" else GoalOccupied
-            raise cls2(
-                f"{which} ({pose[0]:.3f}, {pose[1]:.3f}) is in collision: the footprint's covering circles "
-                f"are {-margin:.3f} m too close to an obstacle"
-            )
+            why = ("the footprint's covering circles reach beyond the map's edge" if math.isinf(margin) else
+                   f"the footprint's covering circles are {-margin:.3f} m too close to an obstacle")
+            raise cls2(f"{which} ({pose[0]:.3f}, {pose[1]:.3f}) is in collision: {why}")
 
     def plan(
         self, start: Pose, goal: Pose, *, time_limit_s: float | None = None,

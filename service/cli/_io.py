@@ -9,6 +9,8 @@ import sys
 from pathlib import Path
 from typing import Any
 
+from planner.errors import InvalidInput
+
 
 def finite_float(text: str) -> float:
     """argparse type: a finite float (rejects nan/inf with a clear message)."""
@@ -35,3 +37,14 @@ def emit_json(result: Any, out: str | Path | None) -> None:
         Path(out).write_text(text + "\n")
     else:
         sys.stdout.write(text + "\n")
+
+
+def read_json_file(path: str | Path, field: str) -> Any:
+    """Parse a JSON file the user named with option ``field``; errors name the field (exit 2)."""
+    p = Path(path)
+    if not p.is_file():
+        raise InvalidInput(field, f"file {p} does not exist")
+    try:
+        return json.loads(p.read_text())
+    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
+        raise InvalidInput(field, f"{p} is not valid JSON: {exc}") from None

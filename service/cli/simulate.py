@@ -9,15 +9,13 @@ sphereplan simulate --bench                        MPC step-time table
 from __future__ import annotations
 
 import argparse
-import json
 import sys
-from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from planner.errors import InvalidInput, NotFound
-from service.cli._io import emit_json, positive_float
+from planner.errors import InvalidInput
+from service.cli._io import emit_json, positive_float, read_json_file
 
 VERB = "simulate"
 HELP = "roll a plan in closed loop (paper 001 MPC + odometry/GNSS fusion) and report tracking metrics"
@@ -79,13 +77,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def _read_plan(path: str) -> dict[str, Any]:
-    p = Path(path)
-    if not p.is_file():
-        raise NotFound("path", f"plan file {path} does not exist")
-    try:
-        plan = json.loads(p.read_text())
-    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
-        raise InvalidInput("path", f"{path} is not valid JSON: {exc}") from None
+    plan = read_json_file(path, "path")
     if not isinstance(plan, dict):
         raise InvalidInput("path", "must be a plan result object")
     states = plan.get("states")

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import argparse
-import json
 import math
 from pathlib import Path
 from typing import Any
@@ -11,7 +10,7 @@ from typing import Any
 from planner.errors import InvalidInput
 from planner.robot import load_robot
 from planner.vpip import api
-from service.cli._io import emit_json, finite_float, positive_float
+from service.cli._io import emit_json, finite_float, positive_float, read_json_file
 
 VERB = "vpip"
 HELP = "VPIP rod driver for rod-driven spheres (daedalus): rods, radius, roll, calibrate, schedule"
@@ -64,10 +63,7 @@ def _calibrate(args: argparse.Namespace) -> int:
 
 
 def _schedule(args: argparse.Namespace) -> int:
-    try:
-        plan: Any = json.loads(_read(args.path, "path"))
-    except json.JSONDecodeError as exc:
-        raise InvalidInput("path", f"{args.path} is not valid JSON: {exc}") from None
+    plan: Any = read_json_file(args.path, "path")
     result = api.schedule_report(plan, args.robot, args.driver)
     emit_json(result, args.out)
     if args.plot:
