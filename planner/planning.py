@@ -56,9 +56,10 @@ def mesh_recheck(grid: OccupancyGrid, robot: RobotProfile, result: PlanResult) -
         return None
     world = _mesh_world(str(mesh))
     states = result.states
-    collides, index, min_distance = world.path_collides(states[:, 0], states[:, 1], states[:, 2], robot)
+    collides, index, min_distance = world.path_collides(states[:, 0], states[:, 1], states[:, 2], robot,
+                                                        distance_every=10)
     return {"mesh": str(mesh), "collides": bool(collides), "first_index": index,
-            "min_distance_m": float(min_distance)}
+            "min_distance_m": float(min_distance), "distance_sampled_every": 10}
 
 
 def plan_path(
