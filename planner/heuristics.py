@@ -58,7 +58,10 @@ def coarse_cost_grid(
 
 
 @njit(cache=True)
-def _dijkstra16(mult: np.ndarray, gx: int, gy: int, cell_m: float) -> np.ndarray:
+def _dijkstra16(mult: np.ndarray, gx: int, gy: int, cell_m: float, sx: int, sy: int, stop_factor: float) -> np.ndarray:
+    """Cost-to-go from cell (gx, gy). Once the start cell (sx, sy) is settled at d_s, the wavefront stops
+    at stop_factor·d_s + 4 cells: every cell not settled by then gets the last settled cost, a lower
+    bound of its own, so the table stays admissible while the far side of a large map is skipped."""
     h, w = mult.shape
     dist = np.full((h, w), np.inf)
     if not (0 <= gx < w and 0 <= gy < h) or not np.isfinite(mult[gy, gx]):
@@ -70,13 +73,19 @@ def _dijkstra16(mult: np.ndarray, gx: int, gy: int, cell_m: float) -> np.ndarray
     dist[gy, gx] = 0.0
     heap_push(keys, vals, size, 0.0, gy * w + gx)
     done = np.zeros((h, w), dtype=np.bool_)
+    stop = math.inf
+    d = 0.0
     while size[0] > 0:
         d, idx = heap_pop(keys, vals, size)
         cy = idx // w
         cx = idx - cy * w
         if done[cy, cx]:
             continue
+        if d > stop:
+            break
         done[cy, cx] = True
+        if cx == sx and cy == sy:
+            stop = stop_factor * d + 4.0 * cell_m
         for k in range(_MOVES.shape[0]):
             mx = _MOVES[k, 0]
             my = _MOVES[k, 1]
@@ -103,6 +112,11 @@ def _dijkstra16(mult: np.ndarray, gx: int, gy: int, cell_m: float) -> np.ndarray
             if nd < dist[ny, nx]:
                 dist[ny, nx] = nd
                 heap_push(keys, vals, size, nd, ny * w + nx)
+    if size[0] > 0:
+        for iy in range(h):
+            for ix in range(w):
+                if not done[iy, ix] and np.isfinite(mult[iy, ix]):
+                    dist[iy, ix] = d
     return dist
 
 
@@ -122,15 +136,21 @@ class HolonomicHeuristic:
     origin_xy : the grid's origin (m).
     cell_m : coarse cell size (m) = fine resolution × downsampling factor.
     goal_xy : goal position (m).
+    start_xy : when given, the wavefront stops at ``stop_factor`` × the start's cost (+ 4 cells); cells
+        beyond get that cost as a lower bound. Nodes that far away have f = g + h·(1 + greed) above the
+        goal's, so the search never needs their exact value.
     """
 
     def __init__(self, mult: np.ndarray, origin_xy: tuple[float, float], cell_m: float,
-                 goal_xy: tuple[float, float]) -> None:
+                 goal_xy: tuple[float, float], start_xy: tuple[float, float] | None = None,
+                 stop_factor: float = 2.0) -> None:
         self.cell_m = cell_m
         self.origin_xy = origin_xy
         gx = math.floor((goal_xy[0] - origin_xy[0]) / cell_m)
         gy = math.floor((goal_xy[1] - origin_xy[1]) / cell_m)
-        raw = _dijkstra16(mult, gx, gy, cell_m)
+        sx, sy = (-1, -1) if start_xy is None else (math.floor((start_xy[0] - origin_xy[0]) / cell_m),
+                                                     math.floor((start_xy[1] - origin_xy[1]) / cell_m))
+        raw = _dijkstra16(mult, gx, gy, cell_m, sx, sy, stop_factor)
         # Within one coarse cell the grid knows nothing: allow a diagonal of slack at each end, and
         # undo the 16-connected metric's overestimate of Euclidean length.
         slack = 2.0 * math.sqrt(2.0) * cell_m

@@ -173,10 +173,12 @@ class HybridAStar:
                                                self.footprint.radius_m, o.proximity_range_m, o.cost_penalty,
                                                self.heuristic_factor)
 
-    def holonomic(self, goal_xy: tuple[float, float]) -> HolonomicHeuristic:
-        """The holonomic cost-to-go table towards ``goal_xy`` (eq. 14g)."""
+    def holonomic(self, goal_xy: tuple[float, float], start_xy: tuple[float, float] | None = None
+                  ) -> HolonomicHeuristic:
+        """The holonomic cost-to-go table towards ``goal_xy`` (eq. 14g), cut off beyond twice the start's
+        cost when ``start_xy`` is given."""
         return HolonomicHeuristic(self.holonomic_mult, (self.clearance.origin_x, self.clearance.origin_y),
-                                  self.grid.resolution_m * self.heuristic_factor, goal_xy)
+                                  self.grid.resolution_m * self.heuristic_factor, goal_xy, start_xy)
 
     @property
     def resolved_step_m(self) -> float:
@@ -239,7 +241,7 @@ class HybridAStar:
         goal = (float(goal[0]), float(goal[1]), float(wrap_angle(float(goal[2]))))
         self._check_endpoint(start, "start")
         self._check_endpoint(goal, "goal")
-        heur = self.holonomic(goal[:2])
+        heur = self.holonomic(goal[:2], start[:2])
         if not math.isfinite(heur(start[0], start[1])):
             raise NoValidPathFound(
                 f"no path: the goal ({goal[0]:.2f}, {goal[1]:.2f}) cannot be reached from the start "

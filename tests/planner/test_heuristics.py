@@ -42,3 +42,22 @@ def test_never_exceeds_the_planned_cost_with_obstacles():
         result = planner.plan((x, y, 0.0), goal)
         assert h(x, y) <= result.length_m + 1e-9
         checked += 1
+
+
+def test_cut_off_wavefront_is_a_lower_bound_of_the_full_one():
+    occ = np.zeros((300, 400), bool)
+    occ[:3] = occ[-3:] = True
+    occ[:, :3] = occ[:, -3:] = True
+    occ[0:200, 195:205] = True
+    grid = OccupancyGrid.from_occupied(occ, 0.05)
+    planner = HybridAStar(grid, load_robot())
+    goal, start = (3.0, 3.0), (6.0, 4.0)
+    full = planner.holonomic(goal).table
+    cut = planner.holonomic(goal, start).table
+    finite = np.isfinite(full)
+    assert np.all(cut[finite] <= full[finite] + 1e-9)
+    assert np.isfinite(cut[finite]).all()
+    h_start = planner.holonomic(goal, start)(*start)
+    near = full <= 1.5 * h_start
+    assert np.allclose(cut[near], full[near])
+    assert (cut < full - 1e-6).any()  # the far side really was cut off
