@@ -66,7 +66,7 @@ def _dijkstra16(mult: np.ndarray, gx: int, gy: int, cell_m: float, sx: int, sy: 
     dist = np.full((h, w), np.inf)
     if not (0 <= gx < w and 0 <= gy < h) or not np.isfinite(mult[gy, gx]):
         return dist
-    cap = h * w * 8 + 16
+    cap = h * w * _MOVES.shape[0] + 16  # each settled cell pushes at most one entry per move
     keys = np.empty(cap)
     vals = np.empty(cap, dtype=np.int64)
     size = np.zeros(1, dtype=np.int64)

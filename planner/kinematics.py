@@ -53,29 +53,6 @@ def child_pose(
     return arc_step(x1, y1, yaw, curvature_c, s)
 
 
-def sample_motion(
-    x: float, y: float, yaw: float, roll_p: float, roll_c: float, curvature_c: float, radius_m: float,
-    s: float, spacing_m: float,
-) -> np.ndarray:
-    """Dense poses (n, 4) of one step: the sideways roll change, then the arc; rows (x, y, yaw, roll).
-
-    Consecutive rows are at most ``spacing_m`` apart. The first row is the step's start pose.
-    """
-    rows = [(x, y, yaw, roll_p)]
-    shift = abs(radius_m * (roll_c - roll_p))
-    n_shift = math.ceil(shift / spacing_m) if shift > 0 else 0
-    for i in range(1, n_shift + 1):
-        f = i / n_shift
-        xs, ys = roll_shift(x, y, yaw, radius_m, f * (roll_c - roll_p))
-        rows.append((xs, ys, yaw, roll_p + f * (roll_c - roll_p)))
-    x1, y1 = roll_shift(x, y, yaw, radius_m, roll_c - roll_p)
-    n_arc = max(1, math.ceil(abs(s) / spacing_m)) if s != 0 else 0
-    for i in range(1, n_arc + 1):
-        xa, ya, yawa = arc_step(x1, y1, yaw, curvature_c, s * i / n_arc)
-        rows.append((xa, ya, yawa, roll_c))
-    return np.array(rows, dtype=float)
-
-
 @njit(cache=True)
 def densify_motions(start: np.ndarray, motions: np.ndarray, radius_m: float, spacing_m: float) -> np.ndarray:
     """Dense poses along a chain of motions, consecutive rows at most ``spacing_m`` apart.

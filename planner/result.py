@@ -121,10 +121,3 @@ def failure_json(code: int, msg: str, robot: RobotProfile | None, planning_time_
         "path": {"header": {"frame_id": "map"}, "poses": []},
     }
 
-
-def states_from_json(data: dict[str, Any]) -> np.ndarray:
-    """(n, 8) states array from a plan result JSON (inverse of ``to_json``'s ``states``)."""
-    rows = data.get("states")
-    if not isinstance(rows, list) or not rows:
-        raise ValueError("plan JSON has no states")
-    return np.array([[float(r[k]) for k in STATE_FIELDS] for r in rows])

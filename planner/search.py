@@ -53,6 +53,8 @@ from planner.robot import RobotProfile
 
 log = logging.getLogger(__name__)
 
+CLOSED_SET_BUDGET_MB = 1024  # the closed-set bitset of one plan may not exceed this (≈ 9000² cells at defaults)
+
 
 @dataclass(frozen=True)
 class PlannerOptions:
@@ -95,7 +97,7 @@ class PlannerOptions:
             value = getattr(self, f.name)
             if isinstance(value, float):
                 need(math.isfinite(value), f.name, f"must be finite, got {value!r}")
-        need(self.n_rolls >= 5 and self.n_rolls % 2 == 1, "n_rolls", "must be an odd number ≥ 5")
+        need(5 <= self.n_rolls <= 31 and self.n_rolls % 2 == 1, "n_rolls", "must be an odd number in [5, 31]")
         need(8 <= self.n_yaw_bins <= 720, "n_yaw_bins", "must be in [8, 720]")
         need(self.n_roll_bins == 0 or (3 <= self.n_roll_bins <= self.n_rolls and self.n_roll_bins % 2 == 1),
              "n_roll_bins", "must be 0 (one per held roll) or an odd number in [3, n_rolls]")
@@ -110,7 +112,8 @@ class PlannerOptions:
         need(self.analytic_ratio_m > 0, "analytic_ratio_m", "must be > 0")
         need(0 <= self.heuristic_downsample <= 8, "heuristic_downsample", "must be in [0, 8] (0 = auto)")
         need(self.time_limit_s > 0, "time_limit_s", "must be > 0")
-        need(self.max_iterations > 0, "max_iterations", "must be > 0")
+        need(0 < self.max_iterations <= 50_000_000, "max_iterations", "must be in [1, 50 000 000]")
+        need(1 <= self.chunk_expansions <= 1_000_000, "chunk_expansions", "must be in [1, 1 000 000]")
         need(0 < self.state_spacing_m <= 0.05, "state_spacing_m", "must be in (0, 0.05]")
         need(1 <= self.smooth_max_tries <= 1000, "smooth_max_tries", "must be in [1, 1000]")
         need(1 <= self.smooth_passes <= 20, "smooth_passes", "must be in [1, 20]")
@@ -151,6 +154,15 @@ class HybridAStar:
     def __init__(self, grid: OccupancyGrid, robot: RobotProfile, options: PlannerOptions | None = None) -> None:
         self.options = options or PlannerOptions()
         self.options.validate()
+        n_bins = self.options.n_roll_bins or self.options.n_rolls
+        closed_mb = grid.width * grid.height * self.options.n_yaw_bins * n_bins / 8 / 2**20
+        if closed_mb > CLOSED_SET_BUDGET_MB:
+            raise InvalidInput(
+                "options.n_yaw_bins",
+                f"the closed set for this map ({grid.width}×{grid.height} cells × {self.options.n_yaw_bins} yaw bins × "
+                f"{n_bins} roll bins) would need {closed_mb:.0f} MB, over the {CLOSED_SET_BUDGET_MB} MB budget; "
+                "use fewer yaw or roll bins",
+            )
         self.grid = grid
         self.robot = robot
         self.footprint = CircleFootprint.for_robot(robot, self.options.n_circles)
@@ -161,7 +173,6 @@ class HybridAStar:
         self.curvatures = kappas
         self.rolls = np.asarray(robot.roll_model.roll_for_curvature(kappas), dtype=float)
         self.rolls[-1], self.rolls[0] = robot.max_roll_rad, -robot.max_roll_rad
-        n_bins = self.options.n_roll_bins or self.options.n_rolls
         # roll index → closed-set bin: equal curvature intervals, upright always in the middle bin
         self.roll_bins = np.rint((kappas / kmax + 1.0) / 2.0 * (n_bins - 1)).astype(np.int64)
         self.n_roll_bins = n_bins

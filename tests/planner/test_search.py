@@ -153,3 +153,13 @@ def test_roll_bins_in_closed_set():
     assert planner.roll_bins[3] == 1  # upright in the middle bin
     with pytest.raises(InvalidInput, match=r"options\.n_roll_bins"):
         PlannerOptions.from_dict({"n_roll_bins": 4})
+
+
+def test_options_that_would_exhaust_memory_or_spin_are_rejected():
+    with pytest.raises(InvalidInput, match=r"options\.n_rolls"):
+        PlannerOptions.from_dict({"n_rolls": 2000001})
+    with pytest.raises(InvalidInput, match=r"options\.chunk_expansions"):
+        PlannerOptions.from_dict({"chunk_expansions": 0})
+    huge = OccupancyGrid.from_occupied(np.zeros((3000, 3000), bool), 0.05)
+    with pytest.raises(InvalidInput, match="budget"):
+        HybridAStar(huge, load_robot(), PlannerOptions(n_yaw_bins=720, n_rolls=31, n_roll_bins=0))
