@@ -30,6 +30,7 @@ import time
 from collections import OrderedDict
 from collections.abc import Callable
 from concurrent.futures import Executor, Future, ProcessPoolExecutor
+from concurrent.futures import TimeoutError as FuturesTimeout
 from concurrent.futures.process import BrokenProcessPool
 from dataclasses import dataclass, replace
 from pathlib import Path
@@ -451,8 +452,9 @@ class PlanningService:
             if self._in_flight >= self.settings.in_flight_cap:
                 raise ServiceBusy(self._in_flight, self.settings.retry_after_s)
             self._in_flight += 1
+            executor = self._executor
             try:
-                inner = self._executor.submit(fn, *args)
+                inner = executor.submit(fn, *args)
             except RuntimeError:  # shut down meanwhile
                 self._in_flight -= 1
                 raise ServiceBusy(self._in_flight, self.settings.retry_after_s) from None
@@ -469,7 +471,7 @@ class PlanningService:
                 outer.set_result(job.result())
             elif isinstance(exc, BrokenProcessPool):
                 log.error("a worker process died: %s; restarting the pool", exc)
-                self._restart_pool()
+                self._restart_pool(executor)
                 outer.set_result(error_outcome("internal", "a worker process died while planning"))
             else:
                 outer.set_result(outcome_of_exception(exc))
@@ -477,12 +479,17 @@ class PlanningService:
         inner.add_done_callback(done)
         return outer
 
-    def _restart_pool(self) -> None:
+    def _restart_pool(self, broken: Any) -> None:
+        """Replace the pool ``broken`` once (every job it failed calls this) and warm the new one."""
         with self._lock:
-            if self._executor is None or not self._ready:
+            if self._executor is None or not self._ready or self._executor is not broken:
                 return
-            old, self._executor = self._executor, self._executor_factory(self.settings.workers)
-        old.shutdown(wait=False, cancel_futures=True)
+            self._executor = self._executor_factory(self.settings.workers)
+            fresh = self._executor
+        broken.shutdown(wait=False, cancel_futures=True)
+        if self.settings.warm_up:
+            for _ in range(self.settings.workers):
+                fresh.submit(warm_up_job)
 
     # ---------------------------------------------------------------- capabilities
 
@@ -572,6 +579,9 @@ class PlanningService:
         """Blocking plan: the :class:`Outcome`, with request errors and busy mapped to outcomes too."""
         try:
             return self.submit_plan(request).result(timeout=timeout_s)
+        except FuturesTimeout:
+            return error_outcome("busy", f"no answer within {timeout_s} s (the plan keeps its worker until its "
+                                 "own time limit ends)")
         except ServiceBusy as exc:
             return exc.outcome()
         except SpherePlanError as exc:

@@ -216,12 +216,17 @@ class ZenohNode:
 
     def _on_goal(self, sample: zenoh.Sample) -> None:
         robot_id = self._robot_id(sample)
+        try:
+            goal = parse(GoalMessage, sample.payload)
+        except _BadPayload as exc:
+            # a malformed goal is reported but does not cancel the goal being planned
+            self._status(robot_id, self._goal_ids.get(robot_id, 0), "invalid_goal", exc.outcome)
+            return
         with self._lock:
             goal_id = self._goal_ids.get(robot_id, 0) + 1
             self._goal_ids[robot_id] = goal_id
             pose = self._poses.get(robot_id)
         try:
-            goal = parse(GoalMessage, sample.payload)
             if pose is None:
                 raise _BadPayload(error_outcome(
                     "bad_input", f"no pose received yet on {PREFIX}/{robot_id}/pose to plan from", "pose", 203))
@@ -240,7 +245,8 @@ class ZenohNode:
 
     def _goal_done(self, robot_id: str, goal_id: int, outcome: Outcome) -> None:
         if self._goal_ids.get(robot_id) != goal_id:
-            return  # a newer goal superseded this one
+            self._status(robot_id, goal_id, "superseded")  # a newer goal replaced this one: no path published
+            return
         if outcome.ok:
             self._publish(robot_id, "path", outcome.body)
             self._status(robot_id, goal_id, "succeeded", length_m=outcome.json().get("length_m"))

@@ -141,6 +141,7 @@ def test_goal_and_pose_topics_plan_and_publish(server: Server) -> None:
         {"wait": "/status", "until": {"state": "invalid_pose"}, "timeout_s": 10},
         {"put": "sphereplan/r1/pose", "payload": dict(zip(("x", "y", "yaw"), HALL_START, strict=True))},
         {"put": "sphereplan/r1/goal", "payload": goal_msg},  # right after the pose: the pose must be used
+        {"put": "sphereplan/r1/goal", "payload": {"map": "hall", "goal": {"x": "far"}}},  # garbage: must not cancel
         {"wait": "/status", "until": {"goal_id": 2, "state": "succeeded"}, "timeout_s": 60},
     ])
     samples = answers[-1]["samples"]
@@ -148,7 +149,8 @@ def test_goal_and_pose_topics_plan_and_publish(server: Server) -> None:
     assert statuses[0]["goal_id"] == 1 and statuses[0]["state"] == "failed" and statuses[0]["error_code"] == 203
     assert "pose" in statuses[0]["error_msg"]
     assert statuses[1]["state"] == "invalid_pose" and "y" in statuses[1]["error_msg"]
-    assert [s["state"] for s in statuses[2:]] == ["planning", "succeeded"]
+    assert sorted(s["state"] for s in statuses[2:]) == ["invalid_goal", "planning", "succeeded"]
+    assert all(s["goal_id"] == 2 for s in statuses[2:])
     paths = [s["payload"] for s in samples if s["key"] == "sphereplan/r1/path"]
     assert len(paths) == 1
     http = httpx.post(server.url + "/v1/plan", json=plan_body(), timeout=60).json()
