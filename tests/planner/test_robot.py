@@ -52,3 +52,17 @@ def test_user_profile_and_errors(tmp_path):
         load_robot(str(bad))
     with pytest.raises(NotFound, match="robot"):
         load_robot("no-such-robot")
+
+
+def test_calibrated_model_between_the_measured_runs():
+    """Between the paper's runs the radius falls monotonically and stays inside the bracketing runs; below
+    the first run it grows without bound towards upright (κ → 0)."""
+    model = load_robot("daedalus").roll_model
+    rolls = np.radians(np.linspace(0.5, 15.0, 300))
+    radii = np.array([model.turning_radius(r) for r in rolls])
+    assert np.all(np.diff(radii) < 0)
+    for lo, hi, r_lo, r_hi in ((5, 10, 1.3, 1.0), (10, 15, 1.0, 0.85)):
+        inside = (rolls > math.radians(lo)) & (rolls < math.radians(hi))
+        assert np.all((radii[inside] < r_lo) & (radii[inside] > r_hi))
+    assert model.turning_radius(math.radians(0.5)) > 2 * model.turning_radius(math.radians(2.0))
+    assert model.turning_radius(0.0) == math.inf
