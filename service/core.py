@@ -32,18 +32,19 @@ from collections.abc import Callable
 from concurrent.futures import Executor, Future, ProcessPoolExecutor
 from concurrent.futures import TimeoutError as FuturesTimeout
 from concurrent.futures.process import BrokenProcessPool
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Literal
 
 import numpy as np
 
 from planner.errors import InvalidInput, NotFound, PlanningError, SpherePlanError
-from planner.mapio import default_maps_dir, list_maps
+from planner.mapio import MESH_SUFFIXES, default_maps_dir, list_maps
 from planner.occupancy import OccupancyGrid
 from planner.result import failure_json
 from planner.robot import DEFAULT_ROBOT, builtin_robots, load_robot
 from planner.search import PlannerOptions
+from service.pipeline import execute_plan
 from service.wire import (
     MAX_INLINE_CELLS,
     MAX_TIME_LIMIT_S,
@@ -63,7 +64,6 @@ UNKNOWN_ERROR_CODE = 200
 #: farthest reconfiguration goal, in sphere radii from the start (paper 004's examples are a few radii)
 MAX_RECONFIGURE_RADII = 200
 MAP_SUFFIXES = (".yaml", ".yml", ".stl", ".obj", ".ply")
-MESH_SUFFIXES = (".stl", ".obj", ".ply")
 
 Kind = Literal["ok", "bad_input", "not_found", "failed", "busy", "internal"]
 
@@ -267,27 +267,16 @@ def warm_up_job() -> int:
 def plan_job(request: dict[str, Any], map_path: str | None) -> Outcome:
     """Run one plan request (the JSON of a validated :class:`PlanRequest`) in a worker process.
 
-    The same steps as ``sphereplan plan``: load the robot and the map, build options (the time limit
-    is passed separately so that planners are cached across time limits), :func:`plan_path`.
+    The same pipeline as ``sphereplan plan``: load the robot and the map, then
+    :func:`service.pipeline.execute_plan`.
     """
-    from planner.planning import plan_path
-
     robot_json = None
     try:
         robot = load_robot(request.get("robot"))
         robot_json = robot.to_json()
-        options = PlannerOptions.from_dict(request.get("options") or {})
-        time_limit = request.get("time_limit_s")
-        if time_limit is None:
-            time_limit = options.time_limit_s
-        options = replace(options, time_limit_s=PlannerOptions.time_limit_s)
-        if map_path is not None:
-            grid = load_map_file(Path(map_path), request.get("robot"))
-        else:
-            grid = inline_grid(request["map"])
-        start = tuple(float(request["start"][k]) for k in ("x", "y", "yaw"))
-        goal = tuple(float(request["goal"][k]) for k in ("x", "y", "yaw"))
-        result = plan_path(grid, robot, start, goal, options, time_limit_s=float(time_limit))  # type: ignore[arg-type]
+        grid = load_map_file(Path(map_path), request.get("robot")) if map_path is not None else inline_grid(
+            request["map"])
+        result = execute_plan(request, grid, robot)
         return Outcome("ok", _dumps(result.to_json()))
     except SpherePlanError as exc:
         return outcome_of_exception(exc, robot_json)

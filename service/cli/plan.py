@@ -10,13 +10,13 @@ from typing import Any
 
 from planner.errors import InvalidInput, PlanningError
 from planner.mapio import load_any
-from planner.planning import plan_path
 from planner.plotting import plot_plan
 from planner.result import failure_json
 from planner.robot import load_robot
 from planner.search import PlannerOptions
 from service.cli import EXIT_BAD_INPUT, EXIT_NO_SOLUTION, EXIT_OK, EXIT_TIMEOUT
 from service.cli._io import emit_json, finite_float, positive_float
+from service.pipeline import execute_plan, pose_of
 
 VERB = "plan"
 HELP = "plan a path the sphere can roll from START to GOAL on a map"
@@ -37,32 +37,37 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.set_defaults(func=run)
 
 
-def _options(args: argparse.Namespace) -> PlannerOptions:
-    data: dict[str, Any] = {}
+def _request(args: argparse.Namespace) -> dict[str, Any]:
+    """The CLI arguments as the plan request JSON the HTTP and Zenoh doors take."""
+    options: dict[str, Any] = {}
     if args.options:
         try:
-            data = json.loads(args.options)
+            options = json.loads(args.options)
         except json.JSONDecodeError as exc:
             raise InvalidInput("--options", f"is not valid JSON: {exc}") from None
-        if not isinstance(data, dict):
+        if not isinstance(options, dict):
             raise InvalidInput("--options", "must be a JSON object")
     if args.reverse:
-        data["allow_reverse"] = True
-    if args.time_limit is not None:
-        data["time_limit_s"] = args.time_limit
-    return PlannerOptions.from_dict(data)
+        options["allow_reverse"] = True
+    pose = ("x", "y", "yaw")
+    return {
+        "start": dict(zip(pose, args.start, strict=True)),
+        "goal": dict(zip(pose, args.goal, strict=True)),
+        "options": options,
+        "time_limit_s": args.time_limit,
+    }
 
 
 def run(args: argparse.Namespace) -> int:
     robot = load_robot(args.robot)
-    options = _options(args)
+    request = _request(args)
+    PlannerOptions.from_dict(request["options"])  # bad options are bad input before the map is read
     if not Path(args.map).exists():
         raise InvalidInput("--map", f"{args.map} does not exist")
     grid = load_any(args.map, robot)
-    start = (args.start[0], args.start[1], args.start[2])
-    goal = (args.goal[0], args.goal[1], args.goal[2])
+    start, goal = pose_of(request["start"]), pose_of(request["goal"])
     try:
-        result = plan_path(grid, robot, start, goal, options)
+        result = execute_plan(request, grid, robot)
     except PlanningError as exc:
         emit_json(failure_json(exc.code, exc.msg, robot), args.out)
         if args.plot:
