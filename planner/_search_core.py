@@ -16,7 +16,7 @@ from numba import njit
 from planner._heap import heap_pop, heap_push
 from planner.collision import pose_margin_nb
 from planner.dubins import WORD_TURNS, dubins_distance, dubins_shortest
-from planner.kinematics import arc_step, roll_shift
+from planner.kinematics import arc_step, roll_shift, wrap
 
 RUNNING, FOUND, EXHAUSTED, FULL = 0, 1, 2, 3
 
@@ -57,11 +57,6 @@ def _motion_margin(
             if worst < 0.0:
                 return worst
     return worst
-
-
-@njit(cache=True)
-def _wrap(a: float) -> float:
-    return math.atan2(math.sin(a), math.cos(a))
 
 
 @njit(cache=True)
@@ -247,7 +242,7 @@ def search_chunk(
         # 2. Goal test: bring the roll back to 0 (a sideways shift) and compare with the goal pose.
         gx, gy = roll_shift(x, y, yaw, radius, -roll)
         if (math.hypot(gx - p[P_GX], gy - p[P_GY]) <= p[P_TOL_XY]
-                and abs(_wrap(yaw - p[P_GYAW])) <= p[P_TOL_YAW]
+                and abs(wrap(yaw - p[P_GYAW])) <= p[P_TOL_YAW]
                 and _motion_margin(clear, p, offx, offy, x, y, yaw, -roll, 0.0, 0.0, math.inf) >= 0.0):
             counters[C_RESULT] = k
             counters[C_SHOT_SEGS] = 0
@@ -277,7 +272,7 @@ def search_chunk(
                     continue
                 cx, cy = roll_shift(x, y, yaw, radius, d_roll)
                 cx, cy, cyaw = arc_step(cx, cy, yaw, curvs[ri], direction * step)
-                cyaw = _wrap(cyaw)
+                cyaw = wrap(cyaw)
                 ckey = _closed_key(p, w, cx, cy, cyaw, roll_bins[ri], n_roll_bins)
                 if closed[ckey >> 3] & (1 << (ckey & 7)):
                     continue

@@ -29,13 +29,9 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from planner.errors import InvalidInput
+from planner.kinematics import wrap
 from planner.occupancy import OccupancyGrid
 from planner.robot import RobotProfile
-
-
-def wrap(a: float) -> float:
-    """Angle wrapped to (−π, π]."""
-    return math.atan2(math.sin(a), math.cos(a))
 
 
 @dataclass(frozen=True)

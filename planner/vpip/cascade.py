@@ -41,6 +41,7 @@ from typing import Any
 import numpy as np
 
 from planner.errors import InvalidInput, RobotProfileError
+from planner.kinematics import wrap
 from planner.robot import RobotProfile
 from planner.vpip.controllers import PitchController, RollController, gains_from_section
 from planner.vpip.rods import RodDriver, RodParams, equivalent_plane
@@ -239,10 +240,6 @@ class TrackingGains:
     lookahead_s: float = 0.5
 
 
-def _wrap(a: float) -> float:
-    return (a + math.pi) % (2.0 * math.pi) - math.pi
-
-
 def run_schedule(
     plan: Mapping[str, Any],
     profile: RobotProfile,
@@ -313,7 +310,7 @@ def run_schedule(
         e_lat = -(x - xr) * math.sin(yawr) + (y - yr) * math.cos(yawr)
         max_lat = max(max_lat, abs(e_lat))
         k_ff = ref.curvature_at(s_sim + max(v_plan, 0.05) * tracking.lookahead_s)
-        k_cmd = k_ff + tracking.k_heading_per_m * _wrap(yawr - yaw) - tracking.k_lateral_per_m2 * e_lat
+        k_cmd = k_ff + tracking.k_heading_per_m * wrap(yawr - yaw) - tracking.k_lateral_per_m2 * e_lat
         k_cmd = max(-max_k, min(max_k, k_cmd))
         target_roll = max(-max_roll, min(max_roll, float(model.roll_for_curvature(k_cmd))))
         step_roll = profile.max_roll_rate_rad_s * dt
