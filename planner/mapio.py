@@ -428,6 +428,20 @@ def _image_size(yaml_path: Path) -> tuple[int, int] | None:
         return None
 
 
+def map_files(folder: str | Path) -> dict[str, Path]:
+    """{name: file} of every map in ``folder`` (name = file stem; a YAML grid wins over a mesh of the same
+    stem). Only names listed here can be opened by name, so a name can never reach outside the folder."""
+    root = Path(folder)
+    if not root.is_dir():
+        return {}
+    order = YAML_SUFFIXES + MESH_SUFFIXES
+    out: dict[str, Path] = {}
+    for path in sorted((p for p in root.iterdir() if p.suffix.lower() in order and p.is_file()
+                        and not p.name.startswith(".")), key=lambda p: (order.index(p.suffix.lower()), p.name)):
+        out.setdefault(path.stem, path)
+    return out
+
+
 def list_maps(folder: str | Path | None = None) -> list[dict[str, Any]]:
     """Describe every map in ``folder`` (default :func:`default_maps_dir`), sorted by file name.
 

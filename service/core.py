@@ -40,6 +40,7 @@ import numpy as np
 
 from planner.errors import InvalidInput, NotFound, PlanningError, SpherePlanError
 from planner.mapio import MESH_SUFFIXES, default_maps_dir, list_maps
+from planner.mapio import map_files as map_index
 from planner.occupancy import OccupancyGrid
 from planner.result import failure_json
 from planner.robot import DEFAULT_ROBOT, builtin_robots, load_robot
@@ -63,7 +64,6 @@ log = logging.getLogger(__name__)
 UNKNOWN_ERROR_CODE = 200
 #: farthest reconfiguration goal, in sphere radii from the start (paper 004's examples are a few radii)
 MAX_RECONFIGURE_RADII = 200
-MAP_SUFFIXES = (".yaml", ".yml", ".stl", ".obj", ".ply")
 
 Kind = Literal["ok", "bad_input", "not_found", "failed", "busy", "internal"]
 
@@ -171,19 +171,6 @@ class ServiceBusy(Exception):
 
 
 # ---------------------------------------------------------------------------------------- map catalogue
-
-
-def map_index(folder: Path) -> dict[str, Path]:
-    """{name: file} of every map in ``folder`` (name = file stem; YAML preferred over a mesh of the same
-    stem). Listing the folder is what makes a name unable to reach anything outside it."""
-    out: dict[str, Path] = {}
-    if not folder.is_dir():
-        return out
-    for path in sorted(folder.iterdir(), key=lambda p: (MAP_SUFFIXES.index(p.suffix.lower())
-                                                        if p.suffix.lower() in MAP_SUFFIXES else 99, p.name)):
-        if path.suffix.lower() in MAP_SUFFIXES and path.is_file() and not path.name.startswith("."):
-            out.setdefault(path.stem, path)
-    return out
 
 
 _GRIDS: OrderedDict[tuple[Any, ...], OccupancyGrid] = OrderedDict()

@@ -309,3 +309,14 @@ def test_thresholds_out_of_range(tmp_path: Path, occ: object, free: object, fiel
 def test_unknown_mode_and_bad_negate(tmp_path: Path) -> None:
     assert _error(write_map(tmp_path, PIXELS, extra="mode: fancy\n")).field == "mode"
     assert _error(write_map(tmp_path, PIXELS, negate=2)).field == "negate"
+
+
+def test_map_files_prefers_the_grid_and_stays_in_the_folder(tmp_path):
+    from planner.mapio import map_files
+
+    for name in ("cave.stl", "cave.yaml", "maze.yml", ".hidden.yaml", "notes.txt"):
+        (tmp_path / name).write_text("x")
+    (tmp_path / "sub").mkdir()
+    (tmp_path / "sub" / "inner.yaml").write_text("x")
+    assert map_files(tmp_path) == {"cave": tmp_path / "cave.yaml", "maze": tmp_path / "maze.yml"}
+    assert map_files(tmp_path / "missing") == {}
