@@ -11,11 +11,13 @@ circle radius, along the path (capped at 1 m: open space reads 1.0).
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
+from planner.errors import InvalidInput
 from planner.robot import RobotProfile
 
 STATE_FIELDS = ("x", "y", "yaw", "roll", "v", "t", "s", "curvature")
@@ -121,3 +123,25 @@ def failure_json(code: int, msg: str, robot: RobotProfile | None, planning_time_
         "path": {"header": {"frame_id": "map"}, "poses": []},
     }
 
+
+
+def state_column(states: Sequence[Any], key: str, required: bool, where: str = "path.states") -> np.ndarray | None:
+    """One field of a plan JSON's ``states`` as a float array, validated with field-named errors.
+
+    Returns None when an optional ``key`` is missing from any state; raises
+    :class:`~planner.errors.InvalidInput` (``path.states[i].key``) for a missing required value, a
+    non-object state or a value that is not a finite number.
+    """
+    values = []
+    for i, st in enumerate(states):
+        if not isinstance(st, Mapping):
+            raise InvalidInput(f"{where}[{i}]", "must be an object")
+        if key not in st or st[key] is None:
+            if required:
+                raise InvalidInput(f"{where}[{i}].{key}", "is required")
+            return None
+        v = st[key]
+        if isinstance(v, bool) or not isinstance(v, int | float) or not math.isfinite(float(v)):
+            raise InvalidInput(f"{where}[{i}].{key}", f"must be a finite number, got {v!r}")
+        values.append(float(v))
+    return np.asarray(values)

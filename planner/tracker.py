@@ -31,6 +31,7 @@ from scipy.spatial import cKDTree
 from planner.errors import InvalidInput
 from planner.kinematics import wrap
 from planner.occupancy import OccupancyGrid
+from planner.result import state_column
 from planner.robot import RobotProfile
 
 
@@ -110,23 +111,8 @@ class ReferencePath:
     def __init__(self, states: list[dict[str, Any]]) -> None:
         if not isinstance(states, list) or len(states) < 2:
             raise InvalidInput("path.states", "needs at least two states")
-        try:
-            arr = np.array(
-                [
-                    [
-                        float(s["x"]),
-                        float(s["y"]),
-                        float(s["yaw"]),
-                        float(s.get("roll", 0.0)),
-                        float(s.get("v", 0.0)),
-                    ]
-                    for s in states
-                ]
-            )
-        except (KeyError, TypeError, ValueError) as exc:
-            raise InvalidInput("path.states", f"every state needs numeric x, y, yaw ({exc})") from None
-        if not np.all(np.isfinite(arr)):
-            raise InvalidInput("path.states", "contains non-finite numbers")
+        columns = [state_column(states, key, key in ("x", "y", "yaw")) for key in ("x", "y", "yaw", "roll", "v")]
+        arr = np.column_stack([np.zeros(len(states)) if c is None else c for c in columns])
         self.states = arr
         d = np.diff(arr[:, :2], axis=0)
         along = d[:, 0] * np.cos(arr[:-1, 2]) + d[:, 1] * np.sin(arr[:-1, 2])

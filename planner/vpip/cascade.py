@@ -34,7 +34,7 @@ Reverse motion (negative ``v`` in the plan) is not supported.
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
@@ -42,6 +42,7 @@ import numpy as np
 
 from planner.errors import InvalidInput, RobotProfileError
 from planner.kinematics import wrap
+from planner.result import state_column
 from planner.robot import RobotProfile
 from planner.vpip.controllers import PitchController, RollController, gains_from_section
 from planner.vpip.rods import RodDriver, RodParams, equivalent_plane
@@ -132,22 +133,6 @@ class SurrogatePlant:
         )
 
 
-def _field(states: Sequence[Any], key: str, required: bool) -> np.ndarray | None:
-    values = []
-    for i, st in enumerate(states):
-        if not isinstance(st, Mapping):
-            raise InvalidInput(f"path.states[{i}]", "must be an object")
-        if key not in st or st[key] is None:
-            if required:
-                raise InvalidInput(f"path.states[{i}].{key}", "is required")
-            return None
-        v = st[key]
-        if isinstance(v, bool) or not isinstance(v, int | float) or not math.isfinite(float(v)):
-            raise InvalidInput(f"path.states[{i}].{key}", f"must be a finite number, got {v!r}")
-        values.append(float(v))
-    return np.asarray(values)
-
-
 @dataclass(frozen=True)
 class PathReference:
     """The planned path as arrays over arc length ``s`` (m): pose, curvature (1/m), time (s), speed (m/s)."""
@@ -168,13 +153,13 @@ class PathReference:
         states = plan.get("states")
         if not isinstance(states, list) or len(states) < 2:
             raise InvalidInput("path.states", "must be a list of at least two states")
-        x = _field(states, "x", True)
-        y = _field(states, "y", True)
-        yaw = _field(states, "yaw", True)
+        x = state_column(states, "x", True)
+        y = state_column(states, "y", True)
+        yaw = state_column(states, "yaw", True)
         assert x is not None and y is not None and yaw is not None
         yaw = np.unwrap(yaw)
         seg = np.hypot(np.diff(x), np.diff(y))
-        s = _field(states, "s", False)
+        s = state_column(states, "s", False)
         if s is None:
             s = np.concatenate([[0.0], np.cumsum(seg)])
         if np.any(np.diff(s) < 0):
@@ -182,12 +167,12 @@ class PathReference:
         keep = np.concatenate([[True], np.diff(s) > 1e-9])
         if keep.sum() < 2:
             raise InvalidInput("path.states", "the path has zero length")
-        v = _field(states, "v", False)
+        v = state_column(states, "v", False)
         if v is not None and np.any(v < 0):
             raise InvalidInput(
                 "path.states.v", "reverse motion (v < 0) is not supported by the VPIP schedule"
             )
-        t = _field(states, "t", False)
+        t = state_column(states, "t", False)
         if t is None or np.any(np.diff(t[keep]) <= 0):
             t = s / profile.max_speed_m_s
         if v is None:
@@ -199,7 +184,7 @@ class PathReference:
             v_full = np.interp(s, s[keep], v)
         else:
             v_full = v
-        k = _field(states, "curvature", False)
+        k = state_column(states, "curvature", False)
         if k is None:
             k = np.gradient(yaw[keep], s[keep])
             k = np.interp(s, s[keep], k)
