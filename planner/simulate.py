@@ -328,3 +328,12 @@ def bench_mpc(
 
 
 __all__ = ["SimulationOptions", "bench_mpc", "cross_track_distance", "footprint_clearance", "simulate_plan"]
+
+
+def format_mpc_bench(rows: list[dict[str, Any]]) -> str:
+    """The rows of :func:`bench_mpc` as a table (MPC step time per horizon)."""
+    lines = [f"{'robot':8} {'qpsol':6} {'N':>3} {'steps':>6} {'p50 ms':>8} {'p95 ms':>8} {'fallback':>8}"]
+    for r in rows:
+        lines.append(f"{r['robot']:8} {r['qpsol']:6} {r['horizon']:>3} {r['steps']:>6} {r['p50_ms']:>8.2f} "
+                     f"{r['p95_ms']:>8.2f} {r['fallback_steps']:>8}")
+    return "\n".join(lines)

@@ -24,12 +24,27 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--rrt-time", type=finite_float, default=2.0, help="RRT* budget, s (0 = skip)")
     parser.add_argument("--csv", default="bench.csv")
     parser.add_argument("--png", default="bench.png")
+    parser.add_argument("--suite", choices=("planning", "reconfigure", "mpc", "all"), default="planning",
+                        help="planning: Hybrid A* vs OMPL (default); reconfigure: Spherobot plan times; "
+                             "mpc: MPC step times of the tracker; all: every table")
     parser.set_defaults(func=run)
 
 
 def run(args: argparse.Namespace) -> int:
     if args.runs < 1:
         raise InvalidInput("--runs", "must be ≥ 1")
+    if args.suite in ("reconfigure", "all"):
+        from planner.reconfigure import benchmark, format_benchmark
+
+        print("reconfiguration plan times (200 random problems per method and mode)")
+        print(format_benchmark(benchmark(200, 0)) + "\n")
+    if args.suite in ("mpc", "all"):
+        from planner.simulate import bench_mpc, format_mpc_bench
+
+        print("MPC tracker step times (zju-60, 50 Hz)")
+        print(format_mpc_bench(bench_mpc()) + "\n")
+    if args.suite not in ("planning", "all"):
+        return 0
     robot = load_robot(args.robot)
     problems = [p for p in list_problems(args.maps) if args.problems in p.name or args.problems in p.map]
     if not problems:

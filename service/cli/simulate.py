@@ -88,17 +88,9 @@ def _read_plan(path: str) -> dict[str, Any]:
 
 
 def _bench() -> int:
-    from planner.simulate import bench_mpc
+    from planner.simulate import bench_mpc, format_mpc_bench
 
-    rows = bench_mpc()
-    sys.stdout.write(
-        f"{'robot':8} {'qpsol':6} {'N':>3} {'steps':>6} {'p50 ms':>8} {'p95 ms':>8} {'fallback':>8}\n"
-    )
-    for r in rows:
-        sys.stdout.write(
-            f"{r['robot']:8} {r['qpsol']:6} {r['horizon']:>3} {r['steps']:>6} {r['p50_ms']:>8.2f} "
-            f"{r['p95_ms']:>8.2f} {r['fallback_steps']:>8}\n"
-        )
+    sys.stdout.write(format_mpc_bench(bench_mpc()) + "\n")
     return 0
 
 
