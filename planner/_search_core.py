@@ -25,8 +25,8 @@ C_NODES, C_EXPANSIONS, C_SINCE_SHOT, C_RESULT, C_SHOT_SEGS = 0, 1, 2, 3, 4
 # params[] slots (float64)
 (P_OX, P_OY, P_RES, P_RC, P_HOX, P_HOY, P_HCELL, P_RHO, P_GX, P_GY, P_GYAW, P_TOL_XY, P_TOL_YAW, P_RADIUS,
  P_STEP, P_SPACING, P_NON_STRAIGHT, P_CHANGE, P_REVERSE, P_SWITCH, P_COST_PENALTY, P_PROX_RANGE, P_GREED,
- P_SHOT_RATIO, P_MAX_ROLL, P_USE_DUBINS, P_ALLOW_REVERSE, P_N_YAW) = range(28)
-N_PARAMS = 28
+ P_SHOT_RATIO, P_MAX_ROLL, P_USE_DUBINS, P_ALLOW_REVERSE, P_N_YAW, P_USE_RS, P_RS_CELL, P_RS_HALF) = range(31)
+N_PARAMS = 31
 MAX_SHOT_SEGS = 3
 
 
@@ -60,7 +60,8 @@ def _motion_margin(
 
 
 @njit(cache=True)
-def _heuristic(htab: np.ndarray, p: np.ndarray, x: float, y: float, yaw: float) -> float:
+def _heuristic(htab: np.ndarray, rs: np.ndarray, p: np.ndarray, x: float, y: float, yaw: float) -> float:
+    """max(holonomic table, Dubins distance) forward; max(holonomic, Reeds–Shepp table) with reversing."""
     ix = int(math.floor((x - p[P_HOX]) / p[P_HCELL]))
     iy = int(math.floor((y - p[P_HOY]) / p[P_HCELL]))
     hh, hw = htab.shape
@@ -71,6 +72,21 @@ def _heuristic(htab: np.ndarray, p: np.ndarray, x: float, y: float, yaw: float) 
         d = dubins_distance(x, y, yaw, p[P_GX], p[P_GY], p[P_GYAW], p[P_RHO])
         if d > h:
             h = d
+    elif p[P_USE_RS] > 0.5:
+        # the Reeds–Shepp table is in the goal's frame, ±P_RS_HALF cells of P_RS_CELL around it
+        dx = x - p[P_GX]
+        dy = y - p[P_GY]
+        c = math.cos(p[P_GYAW])
+        s = math.sin(p[P_GYAW])
+        half = p[P_RS_HALF]
+        i = int(math.floor((c * dx + s * dy) / p[P_RS_CELL] + half))
+        j = int(math.floor((-s * dx + c * dy) / p[P_RS_CELL] + half))
+        n_yaw, n_y, n_x = rs.shape
+        if 0 <= i < n_x and 0 <= j < n_y:
+            k = int(math.floor((wrap(yaw - p[P_GYAW]) + math.pi) / (2.0 * math.pi) * n_yaw))
+            d = rs[min(k, n_yaw - 1), j, i]
+            if d > h:
+                h = d
     return h
 
 
@@ -207,7 +223,7 @@ def shortcut(
 
 @njit(cache=True)
 def search_chunk(
-    clear: np.ndarray, htab: np.ndarray, p: np.ndarray, offx: np.ndarray, offy: np.ndarray,
+    clear: np.ndarray, htab: np.ndarray, rs: np.ndarray, p: np.ndarray, offx: np.ndarray, offy: np.ndarray,
     rolls: np.ndarray, curvs: np.ndarray, roll_bins: np.ndarray, n_roll_bins: int,
     node_f: np.ndarray, node_i: np.ndarray,
     heap_keys: np.ndarray, heap_vals: np.ndarray, heap_size: np.ndarray,
@@ -248,12 +264,14 @@ def search_chunk(
             counters[C_SHOT_SEGS] = 0
             return FOUND
         # 3. Analytic expansion every N expansions, N shrinking as the goal gets closer (Nav2's rule).
-        h_here = _heuristic(htab, p, x, y, yaw)
+        h_here = _heuristic(htab, rs, p, x, y, yaw)
         counters[C_SINCE_SHOT] += 1
         if counters[C_SINCE_SHOT] >= max(1, int(h_here / p[P_SHOT_RATIO])):
             counters[C_SINCE_SHOT] = 0
+            # forward-only: the Dubins shot is optimal, take it; with reversing a forward shot may be far
+            # longer than a manoeuvre with a reverse leg, so take it only when it is within 2× of h
             n = try_shot(clear, p, offx, offy, x, y, yaw, roll, p[P_GX], p[P_GY], p[P_GYAW], 0.0,
-                         seg_roll, seg_curv, seg_len, math.inf)
+                         seg_roll, seg_curv, seg_len, 2.0 * h_here + 1e-6 if allow_reverse else math.inf)
             if n > 0:
                 counters[C_RESULT] = k
                 counters[C_SHOT_SEGS] = n
@@ -276,7 +294,7 @@ def search_chunk(
                 ckey = _closed_key(p, w, cx, cy, cyaw, roll_bins[ri], n_roll_bins)
                 if closed[ckey >> 3] & (1 << (ckey & 7)):
                     continue
-                h = _heuristic(htab, p, cx, cy, cyaw)
+                h = _heuristic(htab, rs, p, cx, cy, cyaw)
                 if not math.isfinite(h):
                     continue
                 # 5. Travel cost: length (incl. the sideways shift) × proximity, turning, reversing,

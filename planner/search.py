@@ -45,7 +45,7 @@ from planner.errors import (
     StartOccupied,
     StartOutsideMap,
 )
-from planner.heuristics import HolonomicHeuristic, auto_downsample, coarse_cost_grid
+from planner.heuristics import HolonomicHeuristic, auto_downsample, coarse_cost_grid, reeds_shepp_table
 from planner.kinematics import child_pose, densify_motions, wrap_angle
 from planner.occupancy import OccupancyGrid
 from planner.result import PlanResult, build_states
@@ -53,6 +53,7 @@ from planner.robot import RobotProfile
 
 log = logging.getLogger(__name__)
 
+RS_CELL_M = 0.1  # sampling of the Reeds–Shepp heuristic table (m)
 CLOSED_SET_BUDGET_MB = 1024  # the closed-set bitset of one plan may not exceed this (≈ 9000² cells at defaults)
 
 
@@ -179,6 +180,8 @@ class HybridAStar:
         offsets = np.hypot(self.footprint.offsets_x, self.footprint.offsets_y)
         self.centre_threshold_m = self.footprint.radius_m - float(offsets.min()) - grid.resolution_m
         o = self.options
+        self.rs_table = (reeds_shepp_table(robot.min_turning_radius_m, o.n_yaw_bins, RS_CELL_M) if o.allow_reverse
+                         else np.zeros((1, 1, 1)))
         self.heuristic_factor = o.heuristic_downsample or auto_downsample(grid.data.shape)
         self.holonomic_mult = coarse_cost_grid(self.clearance.clearance, self.centre_threshold_m,
                                                self.footprint.radius_m, o.proximity_range_m, o.cost_penalty,
@@ -221,6 +224,9 @@ class HybridAStar:
         p[core.P_GREED], p[core.P_SHOT_RATIO] = o.greed, o.analytic_ratio_m
         p[core.P_MAX_ROLL] = self.robot.max_roll_rad
         p[core.P_USE_DUBINS] = 0.0 if o.allow_reverse else 1.0
+        p[core.P_USE_RS] = 1.0 if o.allow_reverse else 0.0
+        p[core.P_RS_CELL] = RS_CELL_M
+        p[core.P_RS_HALF] = self.rs_table.shape[2] // 2
         p[core.P_ALLOW_REVERSE] = 1.0 if o.allow_reverse else 0.0
         p[core.P_N_YAW] = o.n_yaw_bins
         return p
@@ -281,7 +287,8 @@ class HybridAStar:
         while True:
             budget = min(o.chunk_expansions, o.max_iterations - int(counters[core.C_EXPANSIONS]))
             status = core.search_chunk(
-                self.clearance.clearance, heur.table, p, self.footprint.offsets_x, self.footprint.offsets_y,
+                self.clearance.clearance, heur.table, self.rs_table, p, self.footprint.offsets_x,
+                self.footprint.offsets_y,
                 self.rolls, self.curvatures, self.roll_bins, self.n_roll_bins, node_f, node_i, heap_keys, heap_vals,
                 heap_size, closed, counters,
                 budget, seg_roll, seg_curv, seg_len,

@@ -87,3 +87,48 @@ def test_cut_off_wavefront_is_a_lower_bound_of_the_full_one():
     near = full <= 1.5 * h_start
     assert np.allclose(cut[near], full[near])
     assert (cut < full - 1e-6).any()  # the far side really was cut off
+
+
+def test_reeds_shepp_table_never_exceeds_ompl():
+    """Each bin of the table holds the minimum of its corner samples: a lookup anywhere inside the bin is
+    at most OMPL's Reeds–Shepp distance at that pose (and close to it)."""
+    from ompl import base as ob
+
+    from planner.heuristics import reeds_shepp_table
+
+    rho, n_yaw, cell = 1.12, 72, 0.1
+    table = reeds_shepp_table(rho, n_yaw, cell)
+    n = table.shape[2] // 2
+    space = ob.ReedsSheppStateSpace(rho)
+    state, goal = space.allocState(), space.allocState()
+    goal.setX(0.0)
+    goal.setY(0.0)
+    goal.setYaw(0.0)
+    rng = np.random.default_rng(4)
+    gaps = []
+    for x, y, yaw in zip(rng.uniform(-n * cell, n * cell, 3000), rng.uniform(-n * cell, n * cell, 3000),
+                         rng.uniform(-math.pi, math.pi, 3000), strict=True):
+        state.setX(x)
+        state.setY(y)
+        state.setYaw(yaw)
+        i, j = math.floor(x / cell + n), math.floor(y / cell + n)
+        k = min(math.floor((yaw + math.pi) / (2 * math.pi) * n_yaw), n_yaw - 1)
+        gaps.append(space.distance(state, goal) - table[k, j, i])
+    assert min(gaps) >= -1e-9
+    assert np.mean(gaps) < 0.25
+
+
+def test_reverse_search_uses_reeds_shepp_and_stays_valid():
+    from tests.pathcheck import check_path
+
+    occ = np.zeros((160, 160), bool)
+    occ[:3] = occ[-3:] = True
+    occ[:, :3] = occ[:, -3:] = True
+    grid = OccupancyGrid.from_occupied(occ, 0.05)
+    planner = HybridAStar(grid, load_robot(), PlannerOptions(allow_reverse=True))
+    assert planner.rs_table.shape[0] == 72
+    start, goal = (4.0, 4.0, 0.0), (3.0, 4.0, 0.0)      # one metre straight behind: reversing is best
+    result = planner.plan(start, goal)
+    assert check_path(grid, planner.robot, result.states, start, goal) == []
+    assert (result.states[:, 4] < 0).any()              # it does reverse
+    assert result.length_m < 2.0
