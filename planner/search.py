@@ -73,7 +73,7 @@ class PlannerOptions:
     goal_tolerance_yaw_rad: float = math.radians(5.0)
     non_straight_penalty: float = 1.03
     change_penalty: float = 0.1       # per metre of sideways shift caused by a roll change
-    reverse_penalty: float = 2.0
+    reverse_penalty: float = 1.2       # a sphere rolls backwards as well as forwards (Nav2 uses 2.0 for cars)
     switch_cost_m: float = 1.0
     cost_penalty: float = 2.0         # proximity weight (Nav2 ``cost_penalty``, same default)
     proximity_range_m: float = 1.0    # proximity cost fades to 0 this far beyond the inflated obstacles

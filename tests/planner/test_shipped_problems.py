@@ -39,3 +39,17 @@ def test_shipped_problem(problem):
         with pytest.raises(NoValidPathFound):
             plan_path(grid, robot, problem.start, problem.goal, time_limit_s=problem.time_limit_s)
         assert time.perf_counter() - t0 < problem.time_limit_s + 1.0
+
+
+SOLVABLE = [p for p in PROBLEMS if p.solvable]
+
+
+@pytest.mark.parametrize("problem", SOLVABLE, ids=[f"{p.map}:{p.name}" for p in SOLVABLE])
+def test_shipped_problem_with_reversing(problem):
+    from planner.search import PlannerOptions
+
+    grid = _grid(problem.map_path)
+    robot = load_robot()
+    result = plan_path(grid, robot, problem.start, problem.goal, PlannerOptions(allow_reverse=True),
+                       time_limit_s=problem.time_limit_s)
+    assert check_path(grid, robot, result.states, problem.start, problem.goal) == []
