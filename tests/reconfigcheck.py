@@ -11,9 +11,17 @@ import math
 from typing import Any
 
 import numpy as np
+from hypothesis import settings
+from hypothesis import strategies as st
 
 from planner.occupancy import OccupancyGrid
 from planner.rolling import GroundSegment, quat_angle, roll_polyline, tilt_from_quat, wrap_angle
+
+# Shared hypothesis profiles of the rolling / reconfiguration tests: derandomized and bounded so the
+# suite stays fast and repeatable.
+FAST = settings(max_examples=40, derandomize=True, deadline=None)
+PLANS = settings(max_examples=25, derandomize=True, deadline=None)
+angle = st.floats(-math.pi, math.pi)
 
 POSITION_TOL = 1e-3  # × R
 ANGLE_TOL = math.radians(0.1)

@@ -6,7 +6,7 @@ import math
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
+from hypothesis import given
 from hypothesis import strategies as st
 
 from planner.errors import InvalidInput
@@ -21,11 +21,8 @@ from planner.reconfigure_arc import (
     theta_for_offset,
 )
 from planner.rolling import GroundSegment, quat_from_tilt, quat_z, roll_polyline, tilt_from_quat, wrap_angle
-from tests.reconfigcheck import check_result, segments_from_json
+from tests.reconfigcheck import FAST, PLANS, angle, check_result, segments_from_json
 
-FAST = settings(max_examples=40, derandomize=True, deadline=None)
-PLANS = settings(max_examples=25, derandomize=True, deadline=None)
-angle = st.floats(-math.pi, math.pi)
 coord = st.floats(-8.0, 8.0)
 
 EXAMPLE = {

@@ -6,7 +6,7 @@ import math
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
+from hypothesis import given
 from hypothesis import strategies as st
 
 from planner.reconfigure import ReconfigureRequest, plan_reconfiguration
@@ -18,12 +18,9 @@ from planner.reconfigure_triangle import (
     triangle_segments,
 )
 from planner.rolling import IDENTITY, GroundSegment, roll_polyline, roll_segments, tilt_from_quat, wrap_angle
-from tests.reconfigcheck import check_result
+from tests.reconfigcheck import FAST, PLANS, angle, check_result
 
-FAST = settings(max_examples=40, derandomize=True, deadline=None)
-PLANS = settings(max_examples=25, derandomize=True, deadline=None)
 side = st.floats(0.05, math.pi - 0.05)
-angle = st.floats(-math.pi, math.pi)
 
 
 def _roll_triangle(a: float, b: float, C: float, hand: int, R: float = 1.0):

@@ -30,10 +30,9 @@ from planner.rolling import (
     tilt_from_quat,
     wrap_angle,
 )
+from tests.reconfigcheck import FAST, angle
 
-FAST = settings(max_examples=40, derandomize=True, deadline=None)
 SLOW = settings(max_examples=15, derandomize=True, deadline=None)
-angle = st.floats(-math.pi, math.pi)
 theta = st.floats(0.0, math.pi)
 radius = st.floats(0.05, 5.0)
 

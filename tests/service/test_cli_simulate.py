@@ -13,19 +13,7 @@ from planner.occupancy import OccupancyGrid
 from planner.robot import load_robot
 from planner.synthetic_paths import s_curve_plan
 from service.cli import main
-
-KEYS = {
-    "cross_track_rms_m",
-    "cross_track_max_m",
-    "final_position_error_m",
-    "final_yaw_error_rad",
-    "min_clearance_m",
-    "collided",
-    "duration_s",
-    "fallback_steps",
-    "mpc_solve_ms_p50",
-    "mpc_solve_ms_p95",
-}
+from tests.contracts import SIM_METRIC_KEYS
 
 
 @pytest.fixture
@@ -63,7 +51,7 @@ def test_simulate_a_plan_writes_sim_json_and_plot(field_map: str, plan_file: str
     )
     assert code == 0
     sim = json.loads(out.read_text())
-    assert KEYS <= set(sim["metrics"])
+    assert SIM_METRIC_KEYS <= set(sim["metrics"])
     assert sim["metrics"]["final_position_error_m"] < 0.03 and not sim["metrics"]["collided"]
     assert {"trajectory", "estimate", "commands"} <= set(sim)
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
