@@ -13,7 +13,7 @@ Every failure is typed and says what was wrong and, for bad input, which field::
         ├── PlannerTimedOut   207       ├── NoValidPathFound 208
         └── PlannerCancelled  200
 
-The numeric codes are Nav2's ``ComputePathToPose`` error codes (DESIGN.md).
+The numeric codes are Nav2's ``ComputePathToPose`` error codes (docs/contracts.md).
 """
 
 from __future__ import annotations

@@ -1,6 +1,6 @@
 """Exact motion of the rolling sphere over one planning step (paper 001 eq. 1, corrected eq. 14a–c).
 
-Paper 001 eq. 1 (the ground truth, SEED-NOTES):
+Paper 001 eq. 1 (the ground truth, docs/references.md):
 
     ẋ = v cos θ − r φ̇ sin θ,   ẏ = v sin θ + r φ̇ cos θ,   θ̇ = v tan φ / r
 

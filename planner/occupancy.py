@@ -84,12 +84,6 @@ class OccupancyGrid:
             math.floor((y - self.origin[1]) / self.resolution_m),
         )
 
-    def cell_center(self, ix: int, iy: int) -> tuple[float, float]:
-        return (
-            self.origin[0] + (ix + 0.5) * self.resolution_m,
-            self.origin[1] + (iy + 0.5) * self.resolution_m,
-        )
-
     def contains(self, x: float, y: float) -> bool:
         ix, iy = self.world_to_cell(x, y)
         return 0 <= ix < self.width and 0 <= iy < self.height

@@ -1,4 +1,4 @@
-"""The plan result: the sphere's states along the path and the JSON every interface returns (DESIGN.md).
+"""The plan result: the sphere's states along the path and the JSON every interface returns (docs/contracts.md).
 
 ``states`` rows carry x, y, yaw, roll (rad), v (commanded forward speed, m/s; 0 while the sphere only
 rolls sideways to change its roll), t (s), s (distance travelled by the centre, m, sideways shifts

@@ -136,7 +136,7 @@ class RobotProfile:
         return 1.0 / self.max_curvature
 
     def to_json(self) -> dict[str, Any]:
-        """The profile as the result JSON carries it (DESIGN.md: ``robot``)."""
+        """The profile as the result JSON carries it (docs/contracts.md: ``robot``)."""
         model: dict[str, Any] = {"kind": self.roll_model.kind}
         if self.roll_model.kind == "calibrated":
             model["roll_rad"] = list(self.roll_model.table_roll_rad)

@@ -12,7 +12,7 @@ Bad requests are rejected in the calling process before a job is queued: unknown
 Map names are looked up in a listing of the maps folder, never joined onto a path, so a request can
 only reach a map file that is in that folder.
 
-Worker processes cache loaded maps and (through :func:`planner.planning.plan_path`) Hybrid A*
+Worker processes cache loaded maps and (through :func:`planner.hybrid_astar.plan.plan_path`) Hybrid A*
 planners per (map, robot, options), so repeated queries on a map skip the distance transform.
 """
 
@@ -39,12 +39,13 @@ from typing import Any, Literal
 import numpy as np
 
 from planner.errors import InvalidInput, NotFound, PlanningError, SpherePlanError
-from planner.mapio import MESH_SUFFIXES, default_maps_dir, list_maps
-from planner.mapio import map_files as map_index
+from planner.hybrid_astar.search import PlannerOptions
+from planner.maps.catalogue import default_maps_dir, list_maps
+from planner.maps.catalogue import map_files as map_index
+from planner.maps.nav2 import MESH_SUFFIXES
 from planner.occupancy import OccupancyGrid
 from planner.result import failure_json
 from planner.robot import DEFAULT_ROBOT, builtin_robots, load_robot
-from planner.search import PlannerOptions
 from service.pipeline import execute_plan
 from service.wire import (
     MAX_INLINE_CELLS,
@@ -72,7 +73,7 @@ Kind = Literal["ok", "bad_input", "not_found", "failed", "busy", "internal"]
 class ServiceSettings:
     """Everything the service, the HTTP app and the Zenoh node are configured with, validated once.
 
-    ``maps_dir`` None means the shipped maps (:func:`planner.mapio.default_maps_dir`).
+    ``maps_dir`` None means the shipped maps (:func:`planner.maps.catalogue.default_maps_dir`).
     ``max_in_flight`` 0 means 4 jobs per worker. ``zenoh_listen`` is the default peer's only endpoint
     (ignored when ``zenoh_config`` names a Zenoh config file). ``max_body_bytes`` bounds HTTP bodies.
     """
@@ -194,7 +195,7 @@ def _cached(key: tuple[Any, ...], make: Callable[[], OccupancyGrid]) -> Occupanc
 
 def load_map_file(path: Path, robot_name: str | None) -> OccupancyGrid:
     """A map file as a grid, cached per (file, modification time[, robot for meshes])."""
-    from planner.mapio import load_any
+    from planner.maps.load import load_any
 
     stat = path.stat()
     mesh = path.suffix.lower() in MESH_SUFFIXES
@@ -231,12 +232,12 @@ def grid_png(grid: OccupancyGrid) -> bytes:
 def _worker_init() -> None:
     """Runs once in each worker process: import the planner (and its compiled code) up front."""
     logging.basicConfig(level=logging.WARNING, format="%(levelname)s worker %(process)d %(message)s")
-    import planner.planning  # noqa: F401
+    import planner.hybrid_astar.plan  # noqa: F401
 
 
 def warm_up_job() -> int:
     """Plan once on a small synthetic map so that compiled code is loaded before the first request."""
-    from planner.planning import plan_path
+    from planner.hybrid_astar.plan import plan_path
 
     occupied = np.zeros((50, 80), dtype=bool)
     occupied[[0, -1], :] = True
@@ -277,8 +278,8 @@ def plan_job(request: dict[str, Any], map_path: str | None) -> Outcome:
 
 def simulate_job(request: dict[str, Any], map_path: str | None, robot_name: str) -> Outcome:
     """Run one simulate request in a worker: ``simulate_plan`` with the options of ``sphereplan simulate``."""
-    from planner.simulate import SimulationOptions, simulate_plan
-    from planner.tracker import MPCParams
+    from planner.closed_loop.simulate import SimulationOptions, simulate_plan
+    from planner.closed_loop.tracker import MPCParams
 
     def compute() -> dict[str, Any]:
         grid = load_map_file(Path(map_path), None) if map_path is not None else inline_grid(request["map"])
@@ -323,7 +324,7 @@ def tensegrity_static_job(request: dict[str, Any]) -> Outcome:
 
 def reconfigure_job(request: dict[str, Any], map_path: str | None) -> Outcome:
     """``plan_reconfiguration`` in a worker (what ``sphereplan reconfigure`` prints)."""
-    from planner.reconfigure import plan_reconfiguration
+    from planner.spherobot.reconfigure import plan_reconfiguration
 
     def compute() -> dict[str, Any]:
         grid = None
@@ -526,7 +527,7 @@ class PlanningService:
         """Queue a Spherobot reconfiguration (optionally checked against a map). The goal may be at most
         ``MAX_RECONFIGURE_RADII`` sphere radii from the start: the rolled result is sampled along the way,
         so its size and cost grow with distance / radius."""
-        from planner.reconfigure import ROBOT
+        from planner.spherobot.reconfigure import ROBOT
 
         radius = request.radius_m if request.radius_m is not None else load_robot(ROBOT).radius_m
         distance = math.dist(request.start, request.goal)
@@ -564,7 +565,7 @@ class PlanningService:
             return outcome_of_exception(exc)
 
     def maps(self) -> list[dict[str, Any]]:
-        """Every map a request may name (:func:`planner.mapio.list_maps` entries: name, file, kind, size_m,
+        """Every map a request may name (:func:`planner.maps.catalogue.list_maps` entries: name, file, kind, size_m,
         resolution_m); where a grid YAML and a mesh share a name, the YAML is the one served."""
         index = map_index(self.maps_dir)
         return [entry for entry in list_maps(self.maps_dir) if index.get(entry["name"], Path()).name == entry["file"]]

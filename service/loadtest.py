@@ -94,7 +94,7 @@ def serve(workers: int, max_in_flight: int) -> Iterator[Served]:
 
 def problem_requests(include_unsolvable: bool) -> list[dict[str, Any]]:
     """The shipped problems as ``/v1/plan`` bodies."""
-    from planner.mapio import list_problems
+    from planner.maps.problems import list_problems
 
     bodies = []
     for p in list_problems():

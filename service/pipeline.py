@@ -10,11 +10,11 @@ from __future__ import annotations
 from dataclasses import replace
 from typing import Any
 
+from planner.hybrid_astar.plan import plan_path
+from planner.hybrid_astar.search import PlannerOptions
 from planner.occupancy import OccupancyGrid
-from planner.planning import plan_path
 from planner.result import PlanResult
 from planner.robot import RobotProfile
-from planner.search import PlannerOptions
 
 
 def pose_of(data: dict[str, Any]) -> tuple[float, float, float]:

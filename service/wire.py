@@ -4,7 +4,7 @@ They are kept apart from the planner's own types (``planner/`` never imports pyd
 model forbids unknown fields, rejects wrong types (no "1" for 1, no true for 1) and NaN/±inf, and
 bounds sizes, so a bad request is rejected before it reaches a worker process. Poses are in the
 ``map`` frame (metres, radians, yaw counter-clockwise). Response bodies are the plan result JSON of
-DESIGN.md; their models here only document them in the OpenAPI schema (extra keys allowed).
+docs/contracts.md; their models here only document them in the OpenAPI schema (extra keys allowed).
 
 Map and robot names are plain names (letters, digits, ``_``, ``-``, ``.``; no ``/``, no leading dot):
 they are looked up in the maps folder listing and the built-in profiles, never joined onto a path.
@@ -54,9 +54,6 @@ class PoseIn(_Strict):
     x: Metres
     y: Metres
     yaw: Angle = Field(description="rad, counter-clockwise from +x")
-
-    def as_tuple(self) -> tuple[float, float, float]:
-        return float(self.x), float(self.y), float(self.yaw)
 
 
 class InlineGrid(_Strict):
@@ -114,7 +111,7 @@ class GoalMessage(_Strict):
 
 
 class StateIn(_Strict):
-    """One row of a plan's ``states`` (DESIGN.md): SI units, radians."""
+    """One row of a plan's ``states`` (docs/contracts.md): SI units, radians."""
 
     x: Metres
     y: Metres
@@ -264,7 +261,7 @@ class StateOut(_Open):
 
 
 class PlanResultOut(_Open):
-    """The plan result JSON of DESIGN.md (the CLI prints the same object)."""
+    """The plan result JSON of docs/contracts.md (the CLI prints the same object)."""
 
     status: str
     error_code: int

@@ -1,4 +1,4 @@
-"""Field sets of the JSON contracts (DESIGN.md and the issues), written once for every test that checks them."""
+"""Field sets of the JSON contracts (docs/contracts.md), written once for every test that checks them."""
 
 SIM_METRIC_KEYS = frozenset({
     "cross_track_rms_m", "cross_track_max_m", "final_position_error_m", "final_yaw_error_rad",

@@ -81,3 +81,46 @@ def check_path(
             problems.append(f"footprint overlaps an obstacle at state {i} ({x[i]:.2f}, {y[i]:.2f})")
             break
     return problems
+
+
+def _point_segment(p: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Distance from points p (..., 2) to the segments a→b (..., 2)."""
+    ab = b - a
+    t = np.clip(((p - a) * ab).sum(-1) / np.maximum((ab * ab).sum(-1), 1e-300), 0.0, 1.0)
+    return np.hypot(*np.moveaxis(a + t[..., None] * ab - p, -1, 0))
+
+
+def footprint_distance(grid: OccupancyGrid, robot: RobotProfile, states: np.ndarray, reach_m: float = 1.5) -> float:
+    """Smallest distance (m) from the footprint rectangle at any state to a blocked cell square or the map's
+    edge, by brute force over the cells within ``reach_m`` (vertex-to-edge distances of two convex polygons);
+    0 where they overlap. Capped at ``reach_m``."""
+    res = grid.resolution_m
+    hl, hw = robot.footprint_length_m / 2, robot.footprint_width_m / 2
+    blocked = grid.blocked()
+    sq = np.array([[0, 0], [1, 0], [1, 1], [0, 1]], float) * res
+    w, h = grid.size_m
+    best = reach_m
+    for x, y, yaw in states[:, :3]:
+        if footprint_hits(grid, robot, x, y, yaw):
+            return 0.0
+        c, s = math.cos(yaw), math.sin(yaw)
+        body = ((-hl, -hw), (hl, -hw), (hl, hw), (-hl, hw))
+        rect = np.array([[x + c * a - s * b, y + s * a + c * b] for a, b in body])
+        edge = min((rect[:, 0] - grid.origin[0]).min(), (grid.origin[0] + w - rect[:, 0]).min(),
+                   (rect[:, 1] - grid.origin[1]).min(), (grid.origin[1] + h - rect[:, 1]).min())
+        best = min(best, edge)
+        r = math.hypot(hl, hw) + reach_m
+        ix0, iy0 = grid.world_to_cell(x - r, y - r)
+        ix1, iy1 = grid.world_to_cell(x + r, y + r)
+        ix0, iy0, ix1, iy1 = max(ix0, 0), max(iy0, 0), min(ix1, grid.width - 1), min(iy1, grid.height - 1)
+        iy, ix = np.nonzero(blocked[iy0:iy1 + 1, ix0:ix1 + 1])
+        if not len(ix):
+            continue
+        corner = np.column_stack([grid.origin[0] + (ix + ix0) * res, grid.origin[1] + (iy + iy0) * res])
+        cells = corner[:, None, :] + sq[None]                      # (n, 4, 2)
+        r_a, r_b = rect, np.roll(rect, -1, axis=0)                  # rectangle edges
+        c_a, c_b = cells, np.roll(cells, -1, axis=1)                # cell edges
+        d1 = _point_segment(cells[:, :, None, :], r_a[None, None], r_b[None, None]).min(axis=(1, 2))
+        d2 = _point_segment(rect[None, :, None, :], c_a[:, None], c_b[:, None]).min(axis=(1, 2))
+        best = min(best, float(np.minimum(d1, d2).min()))
+    return best

@@ -15,7 +15,7 @@ from hypothesis import settings
 from hypothesis import strategies as st
 
 from planner.occupancy import OccupancyGrid
-from planner.rolling import GroundSegment, quat_angle, roll_polyline, tilt_from_quat, wrap_angle
+from planner.spherobot.rolling import GroundSegment, quat_angle, roll_polyline, tilt_from_quat, wrap_angle
 
 # Shared hypothesis profiles of the rolling / reconfiguration tests: derandomized and bounded so the
 # suite stays fast and repeatable.

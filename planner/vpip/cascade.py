@@ -147,7 +147,7 @@ class PathReference:
 
     @classmethod
     def from_plan(cls, plan: Mapping[str, Any], profile: RobotProfile) -> PathReference:
-        """Read a planner result (DESIGN.md: ``states`` [{x, y, yaw, roll, v, t, s, curvature}])."""
+        """Read a planner result (docs/contracts.md: ``states`` [{x, y, yaw, roll, v, t, s, curvature}])."""
         if not isinstance(plan, Mapping):
             raise InvalidInput("path", "must be a JSON object with 'states'")
         states = plan.get("states")

@@ -9,7 +9,7 @@ Frames and signs
 ----------------
 The equations are evaluated in the paper's frame: origin at the contact point, ``x`` to the right,
 ``y`` in the rolling direction, ``z`` up; the sphere centre is at ``(0, 0, r_m)``. The paper's roll
-``φ_r > 0`` lowers the right disc (eq. 9). sphereplan's public convention is DESIGN.md's (roll > 0
+``φ_r > 0`` lowers the right disc (eq. 9). sphereplan's public convention is docs/contracts.md's (roll > 0
 leans and turns left), so the public functions take
 
 * ``roll_rad`` — robot roll, > 0 leans left; paper ``φ_r = −roll_rad``;

@@ -1,7 +1,7 @@
 """Synthetic plans in the planner's result format, for tests and demos of the VPIP schedule.
 
 Each plan is a dict with ``status``, ``robot`` (profile JSON) and ``states``
-[{x, y, yaw, roll, v, t, s, curvature}] spaced ``spacing_m`` (≤ 5 cm, DESIGN.md) at constant speed;
+[{x, y, yaw, roll, v, t, s, curvature}] spaced ``spacing_m`` (≤ 5 cm, docs/contracts.md) at constant speed;
 ``roll`` is the profile's roll for the state's curvature. Built from arcs and straights.
 """
 

@@ -4,7 +4,7 @@ Each verb lives in its own module of this package and exposes ``VERB`` (its name
 and ``add_arguments(parser)``; the parser's ``func`` default takes the parsed arguments and returns the
 exit code. Verbs are discovered, so a new capability adds one module and nothing else.
 
-Exit codes (DESIGN.md): 0 success, 2 bad input (the message on stderr names the field),
+Exit codes (docs/contracts.md): 0 success, 2 bad input (the message on stderr names the field),
 3 no solution exists, 4 timeout.
 """
 
@@ -17,6 +17,7 @@ import pkgutil
 import sys
 from collections.abc import Sequence
 
+from planner import __version__
 from planner.errors import InvalidInput, NotFound, PlannerTimedOut, PlanningError, SpherePlanError
 
 EXIT_OK = 0
@@ -37,6 +38,7 @@ class _Parser(argparse.ArgumentParser):
 def build_parser() -> argparse.ArgumentParser:
     parser = _Parser(prog="sphereplan", description="Motion planning for spherical rolling robots.")
     parser.add_argument("-v", "--verbose", action="store_true", help="log progress to stderr")
+    parser.add_argument("--version", action="version", version=f"sphereplan {__version__}")
     sub = parser.add_subparsers(dest="verb", required=True, parser_class=_Parser)
     for info in sorted(pkgutil.iter_modules(__path__), key=lambda m: m.name):
         if info.name.startswith("_"):

@@ -5,9 +5,9 @@ from __future__ import annotations
 import argparse
 import sys
 
-from planner.bench import cold_start_s, format_table, plot_bench, run_bench, write_csv
 from planner.errors import InvalidInput
-from planner.mapio import list_problems
+from planner.hybrid_astar.bench import cold_start_s, format_table, plot_bench, run_bench, write_csv
+from planner.maps.problems import list_problems
 from planner.robot import load_robot
 from service.cli._io import finite_float
 
@@ -34,12 +34,12 @@ def run(args: argparse.Namespace) -> int:
     if args.runs < 1:
         raise InvalidInput("--runs", "must be ≥ 1")
     if args.suite in ("reconfigure", "all"):
-        from planner.reconfigure import benchmark, format_benchmark
+        from planner.spherobot.reconfigure import benchmark, format_benchmark
 
         print("reconfiguration plan times (200 random problems per method and mode)")
         print(format_benchmark(benchmark(200, 0)) + "\n")
     if args.suite in ("mpc", "all"):
-        from planner.simulate import bench_mpc, format_mpc_bench
+        from planner.closed_loop.simulate import bench_mpc, format_mpc_bench
 
         print("MPC tracker step times (zju-60, 50 Hz)")
         print(format_mpc_bench(bench_mpc()) + "\n")

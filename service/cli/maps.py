@@ -1,7 +1,7 @@
 """``sphereplan maps``: list the shipped maps and problem sets as JSON.
 
 The folder is ``--maps DIR``, else ``$SPHEREPLAN_MAPS``, else the repository's ``maps/`` folder next to the
-``planner`` package (:func:`planner.mapio.default_maps_dir`).
+``planner`` package (:func:`planner.maps.catalogue.default_maps_dir`).
 """
 
 from __future__ import annotations
@@ -10,7 +10,8 @@ import argparse
 from pathlib import Path
 
 from planner.errors import NotFound
-from planner.mapio import default_maps_dir, list_maps, list_problems
+from planner.maps.catalogue import default_maps_dir, list_maps
+from planner.maps.problems import list_problems
 from service.cli._io import emit_json
 
 VERB = "maps"

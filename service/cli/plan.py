@@ -1,4 +1,4 @@
-"""``sphereplan plan``: plan a rollable path on a map and print the result JSON (DESIGN.md)."""
+"""``sphereplan plan``: plan a rollable path on a map and print the result JSON (docs/contracts.md)."""
 
 from __future__ import annotations
 
@@ -9,11 +9,11 @@ from pathlib import Path
 from typing import Any
 
 from planner.errors import InvalidInput, PlanningError
-from planner.mapio import load_any
-from planner.plotting import plot_plan
+from planner.hybrid_astar.plot import plot_plan
+from planner.hybrid_astar.search import PlannerOptions
+from planner.maps.load import load_any
 from planner.result import failure_json
 from planner.robot import load_robot
-from planner.search import PlannerOptions
 from service.cli import EXIT_BAD_INPUT, EXIT_NO_SOLUTION, EXIT_OK, EXIT_TIMEOUT
 from service.cli._io import emit_json, finite_float, positive_float
 from service.pipeline import execute_plan, pose_of

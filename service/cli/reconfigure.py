@@ -5,9 +5,8 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
-from planner.errors import InvalidInput
 from planner.occupancy import OccupancyGrid
-from planner.reconfigure import METHODS, plan_reconfiguration
+from planner.spherobot.reconfigure import METHODS, plan_reconfiguration
 from service.cli._io import emit_json, finite_float, positive_float
 
 VERB = "reconfigure"
@@ -55,10 +54,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def _load_map(path: str) -> OccupancyGrid:
-    try:
-        from planner.mapio import load_map
-    except ImportError:
-        raise InvalidInput("map", "map loading (planner.mapio) is not available in this build") from None
+    from planner.maps.nav2 import load_map
+
     return load_map(path)
 
 
@@ -85,7 +82,7 @@ def run(args: argparse.Namespace) -> int:
     result = plan_reconfiguration(request_from_args(args), grid=grid)
     emit_json(result, args.out)
     if args.plot:
-        from planner.reconfigure_plot import plot_reconfiguration
+        from planner.spherobot.plot import plot_reconfiguration
 
         plot_reconfiguration(result, args.plot, grid)
     return 0

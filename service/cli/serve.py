@@ -61,7 +61,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def settings_from_args(args: argparse.Namespace) -> ServiceSettings:
-    from planner.mapio import default_maps_dir
+    from planner.maps.catalogue import default_maps_dir
     from service.core import ServiceSettings
 
     maps_dir = Path(args.maps) if args.maps else default_maps_dir()

@@ -88,7 +88,7 @@ def _read_plan(path: str) -> dict[str, Any]:
 
 
 def _bench() -> int:
-    from planner.simulate import bench_mpc, format_mpc_bench
+    from planner.closed_loop.simulate import bench_mpc, format_mpc_bench
 
     sys.stdout.write(format_mpc_bench(bench_mpc()) + "\n")
     return 0
@@ -97,17 +97,17 @@ def _bench() -> int:
 def run(args: argparse.Namespace) -> int:
     if args.bench:
         return _bench()
+    from planner.closed_loop.simulate import SimulationOptions, simulate_plan
+    from planner.closed_loop.synthetic_paths import track_plan
+    from planner.closed_loop.tracker import MPCParams
     from planner.occupancy import OccupancyGrid
     from planner.robot import RobotProfile, load_robot
-    from planner.simulate import SimulationOptions, simulate_plan
-    from planner.synthetic_paths import track_plan
-    from planner.tracker import MPCParams
 
     if not args.path and not args.track:
         raise InvalidInput("path", "give --path PLAN.json or --track")
     given = _read_plan(args.path) if args.path else None
     if args.map:
-        from planner.mapio import load_map  # the map loader (ROS map_server YAML + PGM)
+        from planner.maps.nav2 import load_map  # the map loader (ROS map_server YAML + PGM)
 
         grid = load_map(args.map)
     elif args.track:
@@ -140,7 +140,7 @@ def run(args: argparse.Namespace) -> int:
     )
     result = simulate_plan(grid, plan, robot, seed=args.seed, noise=args.noise, options=options)
     if args.plot:
-        from planner.sim_plot import plot_simulation
+        from planner.closed_loop.plot import plot_simulation
 
         plot_simulation(grid, plan, result, args.plot)
     emit_json(result, args.out)

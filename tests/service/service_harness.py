@@ -22,7 +22,7 @@ from typing import Any
 import httpx
 import numpy as np
 
-from planner.mapio import save_map
+from planner.maps.nav2 import save_map
 from planner.occupancy import OccupancyGrid
 
 REPO = Path(__file__).resolve().parents[2]

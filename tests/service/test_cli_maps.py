@@ -8,7 +8,7 @@ from pathlib import Path
 
 import pytest
 
-from planner.mapio import default_maps_dir
+from planner.maps.catalogue import default_maps_dir
 from service.cli import main
 
 MAPS = Path(__file__).resolve().parents[2] / "maps"

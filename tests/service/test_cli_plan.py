@@ -4,7 +4,7 @@ import json
 
 import pytest
 
-from planner.mapio import default_maps_dir
+from planner.maps.catalogue import default_maps_dir
 from service.cli import main
 
 GARAGE = str(default_maps_dir() / "garage.yaml")
@@ -75,3 +75,11 @@ def test_no_path_exits_3_and_timeout_exits_4(capsys):
     code, out, _ = run(capsys, "plan", "--map", GARAGE, "--start", "12", "8.05", "0", "--goal", "12", "23.55", "3.1416",
                        "--time-limit", "0.001", "--options", "{\"greed\": 0.0, \"chunk_expansions\": 10}")
     assert code == 4 and json.loads(out)["error_code"] == 207
+
+
+def test_version_flag_prints_the_package_version(capsys) -> None:
+    import planner
+    from service.cli import main
+
+    assert main(["--version"]) == 0
+    assert capsys.readouterr().out.strip() == f"sphereplan {planner.__version__}"

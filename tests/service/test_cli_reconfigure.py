@@ -10,7 +10,7 @@ import pytest
 
 import service.cli.reconfigure as verb
 from planner.occupancy import OccupancyGrid
-from planner.reconfigure import plan_reconfiguration
+from planner.spherobot.reconfigure import plan_reconfiguration
 from service.cli import main
 from tests.reconfigcheck import check_result
 
@@ -209,4 +209,6 @@ def test_map_with_room_succeeds_and_reports_the_check(capsys, monkeypatch):
     code, res, _ = _run(capsys, [*EXAMPLE, "--map", "open.yaml"])
     assert code == 0
     assert res["map"]["name"] == "open" and res["map"]["alternatives_tried"] == 1
-    assert res["map"]["min_clearance_m"] >= 0
+    # an empty map: the clearance is the distance to the map's edge, less the radius (within two cells)
+    edge = min(min(s["x"] + 10, 10 - s["x"], s["y"] + 10, 10 - s["y"]) for s in res["samples"]) - res["radius_m"]
+    assert edge - 2 * 0.1 <= res["map"]["min_clearance_m"] <= edge + 1e-9

@@ -164,7 +164,7 @@ def test_request_errors_are_raised_before_a_job_is_queued(maps_dir: Path) -> Non
 
 def test_plan_in_a_thread_pool_matches_the_planner(maps_dir: Path) -> None:
     """The job function itself (run here in a thread): same result as the planner API directly."""
-    from planner.planning import plan_path
+    from planner.hybrid_astar.plan import plan_path
     from planner.robot import load_robot
 
     service = PlanningService(ServiceSettings(maps_dir=maps_dir, zenoh=False, warm_up=False), ThreadPoolExecutor)

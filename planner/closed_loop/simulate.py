@@ -1,0 +1,297 @@
+"""The closed loop of paper 001: simulated sphere → sensors → localisation → tracker → commands, with metrics.
+
+:func:`simulate_plan` rolls a plan (the plan-result JSON) on a map: every control period (50 Hz by
+default) the encoders and IMU feed wheel odometry (eq. 2) and the fusion filter (eq. 3, GNSS fixes when
+available), the tracker (the eq. 15 MPC, or pure pursuit when the solver fails in that step) computes a
+command from the *estimate*, and the simulator (eq. 1 with actuator limits) moves the true sphere. The
+result is the SIM.json object: ``trajectory`` (true states), ``estimate`` (fused), ``odometry``
+(odometry alone), ``gnss`` fixes, ``commands`` and ``metrics``. Disturbances come from one seeded
+generator, so the same inputs and seed give the same result. :func:`bench_mpc` times the MPC step.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from planner.closed_loop.localization import FilterParams, FusionFilter, OdometryIncrement, WheelOdometry
+from planner.closed_loop.simulator import Disturbances, SphereSimulator, SphereState
+from planner.closed_loop.tracker import (
+    Command,
+    Estimate,
+    MPCParams,
+    MPCTracker,
+    ObstacleCircles,
+    PurePursuitTracker,
+    ReferencePath,
+    wrap,
+)
+from planner.errors import InvalidInput
+from planner.maps.clearance import footprint_clearance
+from planner.occupancy import OccupancyGrid
+from planner.robot import RobotProfile, load_robot
+
+
+@dataclass(frozen=True)
+class SimulationOptions:
+    """Closed-loop settings. ``tracker`` is ``"mpc"`` (eq. 15) or ``"pursuit"`` (the geometric tracker
+    alone, fast; used for long localisation runs). ``time_limit_s`` None = 2 × the path's rolling time
+    at cruise speed + 20 s. ``goal_tolerance_m``: a segment is done when its end is this close along
+    the end heading."""
+
+    control_rate_hz: float = 50.0
+    substeps: int = 10
+    tracker: str = "mpc"
+    mpc: MPCParams = field(default_factory=MPCParams)
+    filter: FilterParams = field(default_factory=FilterParams)
+    time_limit_s: float | None = None
+    goal_tolerance_m: float = 0.01
+
+
+def _robot_for(plan: dict[str, Any], robot: RobotProfile | str | None) -> RobotProfile:
+    if isinstance(robot, RobotProfile):
+        return robot
+    if robot is not None:
+        return load_robot(robot)
+    name = plan.get("robot", {}).get("name") if isinstance(plan.get("robot"), dict) else None
+    return load_robot(name) if name else load_robot(None)
+
+
+def cross_track_distance(path_xy: np.ndarray, pts: np.ndarray) -> np.ndarray:
+    """Distance (m) from each point (m, 2) to the path polyline (n, 2): nearest vertex's adjacent pieces."""
+    tree = cKDTree(path_xy)
+    _, idx = tree.query(pts)
+    best = np.full(len(pts), np.inf)
+    for off in (-1, 0):
+        i0 = np.clip(idx + off, 0, len(path_xy) - 2)
+        a, b = path_xy[i0], path_xy[i0 + 1]
+        d = b - a
+        l2 = np.maximum((d * d).sum(1), 1e-18)
+        t = np.clip(((pts - a) * d).sum(1) / l2, 0.0, 1.0)
+        best = np.minimum(best, np.hypot(*(a + t[:, None] * d - pts).T))
+    return best
+
+
+def _rows(arr: np.ndarray, keys: tuple[str, ...]) -> list[dict[str, float]]:
+    return [{k: round(float(v), 6) for k, v in zip(keys, row, strict=True)} for row in arr]
+
+
+def simulate_plan(
+    grid: OccupancyGrid,
+    plan_json: dict[str, Any],
+    robot: RobotProfile | str | None = None,
+    seed: int = 0,
+    noise: str | Disturbances = "default",
+    options: SimulationOptions | None = None,
+) -> dict[str, Any]:
+    """Roll ``plan_json`` (plan result with ``states``) on ``grid`` in closed loop; return the SIM.json dict.
+
+    ``robot`` defaults to the plan's ``robot.name``; ``noise`` is ``"none"``, ``"default"`` or a
+    :class:`Disturbances`; ``seed`` seeds every disturbance.
+    """
+    opts = options or SimulationOptions()
+    if not isinstance(plan_json, dict) or "states" not in plan_json:
+        raise InvalidInput("path", "must be a plan result object with 'states'")
+    rob = _robot_for(plan_json, robot)
+    dist = noise if isinstance(noise, Disturbances) else Disturbances.named(noise)
+    if opts.tracker not in ("mpc", "pursuit"):
+        raise InvalidInput("tracker", f"must be 'mpc' or 'pursuit', got {opts.tracker!r}")
+    if not (opts.control_rate_hz > 0 and math.isfinite(opts.control_rate_hz)):
+        raise InvalidInput("control_rate_hz", "must be a finite number > 0")
+    ref = ReferencePath(plan_json["states"])
+    rng_slip, rng_imu, rng_gnss, rng_init = (
+        np.random.default_rng(s) for s in np.random.SeedSequence(seed).spawn(4)
+    )
+
+    dt = 1.0 / opts.control_rate_hz
+    sim = SphereSimulator(rob, opts.substeps)
+    fallback = PurePursuitTracker(rob, cruise_m_s=opts.mpc.cruise_m_s)
+    mpc = MPCTracker(rob, opts.mpc, ObstacleCircles(grid)) if opts.tracker == "mpc" else None
+    cruise = fallback.cruise
+    total_len = sum(seg.length_m for seg in ref.segments)
+    t_limit = opts.time_limit_s if opts.time_limit_s is not None else 2 * total_len / cruise + 20.0
+
+    x0, y0, yaw0, roll0 = ref.states[0, :4]
+    e_xy = rng_init.normal(0.0, dist.init_xy_m, 2) if dist.init_xy_m > 0 else np.zeros(2)
+    e_yaw = float(rng_init.normal(0.0, dist.init_yaw_rad)) if dist.init_yaw_rad > 0 else 0.0
+    state = SphereState(x0 + e_xy[0], y0 + e_xy[1], yaw0 + e_yaw, roll0, 0.0)
+    odo = WheelOdometry(rob, (x0, y0, yaw0))
+    kf = FusionFilter(
+        rob,
+        (x0, y0, yaw0),
+        FilterParams(**{**opts.filter.__dict__, "gnss_sigma_m": max(dist.gnss_noise_m, 0.005)}),
+    )
+
+    def imu(roll: float) -> float:
+        n = rng_imu.normal(0.0, dist.imu_roll_noise_rad) if dist.imu_roll_noise_rad > 0 else 0.0
+        return roll + dist.imu_roll_bias_rad + n
+
+    # GNSS outage windows drawn up front (Poisson starts, uniform durations)
+    outages: list[tuple[float, float]] = []
+    if dist.gnss_outage_rate_hz > 0:
+        t_o = float(rng_gnss.exponential(1.0 / dist.gnss_outage_rate_hz))
+        while t_o < t_limit:
+            length = float(rng_gnss.uniform(*dist.gnss_outage_s))
+            outages.append((t_o, t_o + length))
+            t_o += length + float(rng_gnss.exponential(1.0 / dist.gnss_outage_rate_hz))
+    gnss_period = 1.0 / dist.gnss_rate_hz
+    next_gnss = 0.0
+
+    traj, est_rows, odo_rows, cmd_rows, gnss_rows = [], [], [], [], []
+    solve_ms: list[float] = []
+    fallback_steps = 0
+    seg_i = 0
+    s_proj = 0.0
+    imu_prev = imu(state.roll)
+    wheel_dist = 0.0
+    k = 0
+    reached = False
+    while True:
+        t = k * dt
+        # 1. sensors → localisation (eq. 2, eq. 3)
+        imu_now = imu(state.roll) if k > 0 else imu_prev
+        if k > 0:
+            enc = wheel_dist * (
+                1.0 + (rng_slip.normal(0.0, dist.encoder_noise) if dist.encoder_noise > 0 else 0.0)
+            )
+            inc = OdometryIncrement(enc, imu_prev, imu_now)
+            odo.update(inc)
+            kf.predict(inc)
+        imu_prev = imu_now
+        if t + 1e-9 >= next_gnss:
+            next_gnss += gnss_period
+            out = any(a <= t < b for a, b in outages)
+            if dist.gnss_available and not out:
+                n_xy = rng_gnss.normal(0.0, dist.gnss_noise_m, 2) if dist.gnss_noise_m > 0 else np.zeros(2)
+                z = (state.x + n_xy[0], state.y + n_xy[1])
+                kf.correct(z)
+                gnss_rows.append((t, z[0], z[1]))
+        est = Estimate(float(kf.pose[0]), float(kf.pose[1]), float(kf.pose[2]), imu_now, state.v)
+        traj.append((t, state.x, state.y, state.yaw, state.roll, state.v))
+        est_rows.append((t, *kf.pose))
+        odo_rows.append((t, *odo.pose))
+        if t >= t_limit:
+            break
+        # 2. tracker on the estimate
+        seg = ref.segments[seg_i]
+        s_proj = seg.project(est.x, est.y, s_proj)
+        to_go = seg.length_m - s_proj
+        if to_go <= opts.goal_tolerance_m or (
+            to_go < 0.5 and seg.remaining(est.x, est.y) <= opts.goal_tolerance_m
+        ):
+            cmd = Command(0.0, float(seg.roll[-1]))
+            if abs(state.v) < 1e-3:
+                if seg_i + 1 == len(ref.segments):
+                    reached = True
+                    cmd_rows.append((t, cmd.v, cmd.roll))
+                    break
+                seg_i += 1
+                s_proj = 0.0
+                if mpc is not None:
+                    mpc.reset()
+        else:
+            cmd = mpc.command(est, seg, s_proj) if mpc is not None else fallback.command(est, seg, s_proj)
+            if mpc is not None:
+                solve_ms.append(cmd.solve_ms)
+                if not cmd.ok:
+                    fallback_steps += 1
+                    cmd = fallback.command(est, seg, s_proj)
+        cmd_rows.append((t, cmd.v, cmd.roll))
+        # 3. the true sphere moves (eq. 1), with slip
+        g = 1.0 - dist.slip_scale + (rng_slip.normal(0.0, dist.slip_noise) if dist.slip_noise > 0 else 0.0)
+        step = sim.step(state, cmd.v, cmd.roll, dt, ground_factor=g)
+        state, wheel_dist = step.state, step.wheel_distance_m
+        k += 1
+
+    tr = np.array(traj)
+    es = np.array(est_rows)
+    od = np.array(odo_rows)
+    end = ref.end
+    xt = cross_track_distance(ref.polyline(), tr[:, 1:3])
+    est_err = np.hypot(*(es[:, 1:3] - tr[:, 1:3]).T)
+    odo_err = np.hypot(*(od[:, 1:3] - tr[:, 1:3]).T)
+    clearance = footprint_clearance(grid, rob, tr[:, 1:4])
+    metrics = {
+        "cross_track_rms_m": float(np.sqrt(np.mean(xt**2))),
+        "cross_track_max_m": float(xt.max()),
+        "final_position_error_m": float(math.hypot(tr[-1, 1] - end[0], tr[-1, 2] - end[1])),
+        "final_yaw_error_rad": abs(wrap(float(tr[-1, 3] - end[2]))),
+        "min_clearance_m": clearance,
+        "collided": bool(clearance <= 0.0),
+        "reached_goal": reached,
+        "duration_s": float(tr[-1, 0]),
+        "steps": len(cmd_rows),
+        "fallback_steps": fallback_steps,
+        "mpc_solve_ms_p50": float(np.percentile(solve_ms, 50)) if solve_ms else None,
+        "mpc_solve_ms_p95": float(np.percentile(solve_ms, 95)) if solve_ms else None,
+        "estimate_error_rms_m": float(np.sqrt(np.mean(est_err**2))),
+        "estimate_error_max_m": float(est_err.max()),
+        "estimate_error_final_m": float(est_err[-1]),
+        "estimate_yaw_error_final_rad": abs(wrap(float(es[-1, 3] - tr[-1, 3]))),
+        "odometry_error_rms_m": float(np.sqrt(np.mean(odo_err**2))),
+        "odometry_error_max_m": float(odo_err.max()),
+        "odometry_error_final_m": float(odo_err[-1]),
+        "odometry_yaw_error_final_rad": abs(wrap(float(od[-1, 3] - tr[-1, 3]))),
+        "gnss_fixes": len(gnss_rows),
+    }
+    return {
+        "robot": rob.to_json(),
+        "seed": seed,
+        "noise": noise if isinstance(noise, str) else "custom",
+        "tracker": opts.tracker,
+        "control_rate_hz": opts.control_rate_hz,
+        "trajectory": _rows(tr, ("t", "x", "y", "yaw", "roll", "v")),
+        "estimate": _rows(es, ("t", "x", "y", "yaw")),
+        "odometry": _rows(od, ("t", "x", "y", "yaw")),
+        "gnss": _rows(np.array(gnss_rows).reshape(-1, 3), ("t", "x", "y")),
+        "commands": _rows(np.array(cmd_rows).reshape(-1, 3), ("t", "v", "roll")),
+        "metrics": metrics,
+    }
+
+
+def bench_mpc(
+    robot: str = "zju-60",
+    horizons: tuple[int, ...] = (10, 15, 20),
+    steps: int = 250,
+    qpsols: tuple[str, ...] = ("qrqp",),
+) -> list[dict[str, Any]]:
+    """Time the MPC step in closed loop on an S-curve (noise-free): one row per (horizon, QP solver) with
+    solve-time percentiles in ms. ``steps`` control periods per row. Prints nothing; see the CLI."""
+    from planner.closed_loop.synthetic_paths import s_curve_plan
+
+    rob = load_robot(robot)
+    plan = s_curve_plan(rob)
+    grid = OccupancyGrid.from_occupied(np.zeros((120, 160), dtype=bool), 0.05, (-1.0, -2.0, 0.0))
+    rows = []
+    for qp in qpsols:
+        for n in horizons:
+            opts = SimulationOptions(mpc=MPCParams(horizon=n, qpsol=qp), time_limit_s=steps / 50.0)
+            m = simulate_plan(grid, plan, rob, seed=0, noise="none", options=opts)["metrics"]
+            rows.append(
+                {
+                    "robot": robot,
+                    "qpsol": qp,
+                    "horizon": n,
+                    "steps": m["steps"],
+                    "p50_ms": m["mpc_solve_ms_p50"],
+                    "p95_ms": m["mpc_solve_ms_p95"],
+                    "fallback_steps": m["fallback_steps"],
+                }
+            )
+    return rows
+
+
+__all__ = ["SimulationOptions", "bench_mpc", "cross_track_distance", "simulate_plan"]
+
+
+def format_mpc_bench(rows: list[dict[str, Any]]) -> str:
+    """The rows of :func:`bench_mpc` as a table (MPC step time per horizon)."""
+    lines = [f"{'robot':8} {'qpsol':6} {'N':>3} {'steps':>6} {'p50 ms':>8} {'p95 ms':>8} {'fallback':>8}"]
+    for r in rows:
+        lines.append(f"{r['robot']:8} {r['qpsol']:6} {r['horizon']:>3} {r['steps']:>6} {r['p50_ms']:>8.2f} "
+                     f"{r['p95_ms']:>8.2f} {r['fallback_steps']:>8}")
+    return "\n".join(lines)

@@ -1,0 +1,326 @@
+"""The compiled inner loop of the spherical Hybrid A* (see :mod:`planner.hybrid_astar.search` for the algorithm).
+
+Everything here works on preallocated arrays so that numba can compile it; the Python driver in
+:mod:`planner.hybrid_astar.search` owns the arrays, checks the deadline and cancellation between chunks, grows the
+node storage and turns the result into a path. Status codes returned by :func:`search_chunk`:
+RUNNING (chunk finished, call again), FOUND, EXHAUSTED (open list empty), FULL (grow node storage).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from planner.hybrid_astar.dubins import WORD_TURNS, dubins_distance, dubins_shortest
+from planner.hybrid_astar.heap import heap_pop, heap_push
+from planner.kinematics import arc_step, roll_shift, wrap
+from planner.maps.clearance import pose_margin_nb
+
+RUNNING, FOUND, EXHAUSTED, FULL = 0, 1, 2, 3
+
+# counters[] slots
+C_NODES, C_EXPANSIONS, C_SINCE_SHOT, C_RESULT, C_SHOT_SEGS = 0, 1, 2, 3, 4
+# params[] slots (float64)
+(P_OX, P_OY, P_RES, P_RC, P_HOX, P_HOY, P_HCELL, P_RHO, P_GX, P_GY, P_GYAW, P_TOL_XY, P_TOL_YAW, P_RADIUS,
+ P_STEP, P_SPACING, P_NON_STRAIGHT, P_CHANGE, P_REVERSE, P_SWITCH, P_COST_PENALTY, P_PROX_RANGE, P_GREED,
+ P_SHOT_RATIO, P_MAX_ROLL, P_USE_DUBINS, P_ALLOW_REVERSE, P_N_YAW, P_USE_RS, P_RS_CELL, P_RS_HALF) = range(31)
+N_PARAMS = 31
+MAX_SHOT_SEGS = 3
+
+
+@njit(cache=True)
+def _motion_margin(
+    clear: np.ndarray, p: np.ndarray, offx: np.ndarray, offy: np.ndarray,
+    x: float, y: float, yaw: float, d_roll: float, curv: float, s: float, worst_so_far: float,
+) -> float:
+    """Smallest footprint margin (m) along a roll change then an arc, sampled ≤ p[P_SPACING] apart."""
+    ox, oy, res, r_c, radius, spacing = p[P_OX], p[P_OY], p[P_RES], p[P_RC], p[P_RADIUS], p[P_SPACING]
+    worst = worst_so_far
+    shift = abs(radius * d_roll)
+    n = int(math.ceil(shift / spacing))
+    for i in range(1, n + 1):
+        xs, ys = roll_shift(x, y, yaw, radius, d_roll * i / n)
+        m = pose_margin_nb(clear, ox, oy, res, xs, ys, yaw, offx, offy, r_c)
+        if m < worst:
+            worst = m
+            if worst < 0.0:
+                return worst
+    x1, y1 = roll_shift(x, y, yaw, radius, d_roll)
+    n = int(math.ceil(abs(s) / spacing))
+    for i in range(1, n + 1):
+        xa, ya, ya2 = arc_step(x1, y1, yaw, curv, s * i / n)
+        m = pose_margin_nb(clear, ox, oy, res, xa, ya, ya2, offx, offy, r_c)
+        if m < worst:
+            worst = m
+            if worst < 0.0:
+                return worst
+    return worst
+
+
+@njit(cache=True)
+def _heuristic(htab: np.ndarray, rs: np.ndarray, p: np.ndarray, x: float, y: float, yaw: float) -> float:
+    """max(holonomic table, Dubins distance) forward; max(holonomic, Reeds–Shepp table) with reversing."""
+    ix = int(math.floor((x - p[P_HOX]) / p[P_HCELL]))
+    iy = int(math.floor((y - p[P_HOY]) / p[P_HCELL]))
+    hh, hw = htab.shape
+    if ix < 0 or iy < 0 or ix >= hw or iy >= hh:
+        return math.inf
+    h = htab[iy, ix]
+    if p[P_USE_DUBINS] > 0.5:
+        d = dubins_distance(x, y, yaw, p[P_GX], p[P_GY], p[P_GYAW], p[P_RHO])
+        if d > h:
+            h = d
+    elif p[P_USE_RS] > 0.5:
+        # the Reeds–Shepp table is in the goal's frame, ±P_RS_HALF cells of P_RS_CELL around it
+        dx = x - p[P_GX]
+        dy = y - p[P_GY]
+        c = math.cos(p[P_GYAW])
+        s = math.sin(p[P_GYAW])
+        half = p[P_RS_HALF]
+        i = int(math.floor((c * dx + s * dy) / p[P_RS_CELL] + half))
+        j = int(math.floor((-s * dx + c * dy) / p[P_RS_CELL] + half))
+        n_yaw, n_y, n_x = rs.shape
+        if 0 <= i < n_x and 0 <= j < n_y:
+            k = int(math.floor((wrap(yaw - p[P_GYAW]) + math.pi) / (2.0 * math.pi) * n_yaw))
+            d = rs[min(k, n_yaw - 1), j, i]
+            if d > h:
+                h = d
+    return h
+
+
+@njit(cache=True)
+def _closed_key(p: np.ndarray, w: int, x: float, y: float, yaw: float, rb: int, n_rb: int) -> int:
+    ix = int(math.floor((x - p[P_OX]) / p[P_RES]))
+    iy = int(math.floor((y - p[P_OY]) / p[P_RES]))
+    n_yaw = int(p[P_N_YAW])
+    a = yaw - 2.0 * math.pi * math.floor(yaw / (2.0 * math.pi))
+    yb = int(a / (2.0 * math.pi) * n_yaw) % n_yaw
+    return ((iy * w + ix) * n_yaw + yb) * n_rb + rb
+
+
+@njit(cache=True)
+def try_shot(
+    clear: np.ndarray, p: np.ndarray, offx: np.ndarray, offy: np.ndarray,
+    x: float, y: float, yaw: float, roll: float, gx: float, gy: float, gyaw: float, groll: float,
+    seg_roll: np.ndarray, seg_curv: np.ndarray, seg_len: np.ndarray, max_len: float,
+) -> int:
+    """Analytic expansion from (x, y, yaw, roll) to (gx, gy, gyaw) arriving with roll ``groll``.
+
+    A Dubins path at the minimum radius is turned into roll-held segments (±φmax on arcs, 0 on straights).
+    Each roll change shifts the centre sideways (eq. 1), so the Dubins target is corrected by fixed-point
+    iteration until the rolled end lands on the goal (< 0.1 mm). Returns the number of segments written,
+    or 0 when no valid, collision-free shot exists.
+    """
+    radius, rho, max_roll = p[P_RADIUS], p[P_RHO], p[P_MAX_ROLL]
+    tx, ty = gx, gy
+    ok = False
+    n = 0
+    for _ in range(8):
+        word, t, pp, q = dubins_shortest(x, y, yaw, tx, ty, gyaw, rho)
+        if word < 0:
+            return 0
+        cx, cy, cyaw, croll = x, y, yaw, roll
+        n = 0
+        lens = (t * rho, pp * rho, q * rho)
+        for k in range(3):
+            if lens[k] < 1e-9:
+                continue
+            turn = WORD_TURNS[word, k]
+            r_k = turn * max_roll
+            seg_roll[n] = r_k
+            seg_curv[n] = turn / rho
+            seg_len[n] = lens[k]
+            n += 1
+            cx, cy = roll_shift(cx, cy, cyaw, radius, r_k - croll)
+            cx, cy, cyaw = arc_step(cx, cy, cyaw, turn / rho, lens[k])
+            croll = r_k
+        cx, cy = roll_shift(cx, cy, cyaw, radius, groll - croll)
+        ex = cx - gx
+        ey = cy - gy
+        if math.hypot(ex, ey) < 1e-4:
+            ok = True
+            break
+        tx -= ex
+        ty -= ey
+    if not ok or n == 0:
+        return 0
+    if shot_length(radius, roll, groll, seg_roll, seg_len, n) >= max_len:
+        return 0
+    cx, cy, cyaw, croll = x, y, yaw, roll
+    worst = math.inf
+    for k in range(n):
+        worst = _motion_margin(clear, p, offx, offy, cx, cy, cyaw, seg_roll[k] - croll, seg_curv[k],
+                               seg_len[k], worst)
+        if worst < 0.0:
+            return 0
+        cx, cy = roll_shift(cx, cy, cyaw, radius, seg_roll[k] - croll)
+        cx, cy, cyaw = arc_step(cx, cy, cyaw, seg_curv[k], seg_len[k])
+        croll = seg_roll[k]
+    worst = _motion_margin(clear, p, offx, offy, cx, cy, cyaw, groll - croll, 0.0, 0.0, worst)
+    if worst < 0.0:
+        return 0
+    return n
+
+
+@njit(cache=True)
+def shot_length(radius: float, roll: float, groll: float, seg_roll: np.ndarray, seg_len: np.ndarray, n: int) -> float:
+    """Distance the centre travels along a shot: arcs plus the sideways shifts of its roll changes."""
+    total = 0.0
+    croll = roll
+    for k in range(n):
+        total += seg_len[k] + radius * abs(seg_roll[k] - croll)
+        croll = seg_roll[k]
+    return total + radius * abs(groll - croll)
+
+
+@njit(cache=True)
+def shortcut(
+    clear: np.ndarray, p: np.ndarray, offx: np.ndarray, offy: np.ndarray, knots: np.ndarray, cum: np.ndarray,
+    max_tries: int, out_ij: np.ndarray, out_roll: np.ndarray, out_curv: np.ndarray, out_len: np.ndarray,
+    out_n: np.ndarray,
+) -> int:
+    """Greedy shortcutting: from knot i, connect to the farthest knot j reachable by a valid, shorter shot.
+
+    knots (n, 4) are poses (x, y, yaw, roll) at motion ends; cum[i] is the distance travelled up to knot i.
+    At most ``max_tries`` candidate j are tried per i. Returns the number of shortcuts written.
+    """
+    n = knots.shape[0]
+    sr = np.zeros(MAX_SHOT_SEGS)
+    sc = np.zeros(MAX_SHOT_SEGS)
+    sl = np.zeros(MAX_SHOT_SEGS)
+    count = 0
+    i = 0
+    while i < n - 2:
+        stride = max(1, (n - 2 - i) // max_tries)
+        j = n - 1
+        found = False
+        while j > i + 1:
+            budget = cum[j] - cum[i] - 1e-6
+            if math.hypot(knots[j, 0] - knots[i, 0], knots[j, 1] - knots[i, 1]) >= budget:
+                j -= stride
+                continue
+            m = try_shot(clear, p, offx, offy, knots[i, 0], knots[i, 1], knots[i, 2], knots[i, 3],
+                         knots[j, 0], knots[j, 1], knots[j, 2], knots[j, 3], sr, sc, sl, budget)
+            if m > 0:
+                out_ij[count, 0] = i
+                out_ij[count, 1] = j
+                out_n[count] = m
+                for k in range(m):
+                    out_roll[count, k] = sr[k]
+                    out_curv[count, k] = sc[k]
+                    out_len[count, k] = sl[k]
+                count += 1
+                i = j
+                found = True
+                break
+            j -= stride
+        if not found:
+            i += 1
+    return count
+
+
+@njit(cache=True)
+def search_chunk(
+    clear: np.ndarray, htab: np.ndarray, rs: np.ndarray, p: np.ndarray, offx: np.ndarray, offy: np.ndarray,
+    rolls: np.ndarray, curvs: np.ndarray, roll_bins: np.ndarray, n_roll_bins: int,
+    node_f: np.ndarray, node_i: np.ndarray,
+    heap_keys: np.ndarray, heap_vals: np.ndarray, heap_size: np.ndarray,
+    closed: np.ndarray, counters: np.ndarray, max_expansions: int,
+    seg_roll: np.ndarray, seg_curv: np.ndarray, seg_len: np.ndarray,
+) -> int:
+    """Run up to ``max_expansions`` Hybrid-A* expansions.
+
+    node_f[k] = (x, y, yaw, roll, g); node_i[k] = (parent, roll index, direction ±1).
+    """
+    w = clear.shape[1]
+    n_roll = rolls.size
+    radius = p[P_RADIUS]
+    step = p[P_STEP]
+    allow_reverse = p[P_ALLOW_REVERSE] > 0.5
+    greed = p[P_GREED]
+    done = 0
+    while done < max_expansions:
+        # 1. Pop the cheapest open node; skip it if its (cell, yaw bin, roll) was already expanded.
+        if heap_size[0] == 0:
+            return EXHAUSTED
+        if counters[C_NODES] + 2 * n_roll >= node_f.shape[0] or heap_size[0] + 2 * n_roll >= heap_keys.size:
+            return FULL
+        _, k = heap_pop(heap_keys, heap_vals, heap_size)
+        x, y, yaw, roll, g = node_f[k, 0], node_f[k, 1], node_f[k, 2], node_f[k, 3], node_f[k, 4]
+        key = _closed_key(p, w, x, y, yaw, roll_bins[node_i[k, 1]], n_roll_bins)
+        if closed[key >> 3] & (1 << (key & 7)):
+            continue
+        closed[key >> 3] |= 1 << (key & 7)
+        done += 1
+        counters[C_EXPANSIONS] += 1
+        # 2. Goal test: bring the roll back to 0 (a sideways shift) and compare with the goal pose.
+        gx, gy = roll_shift(x, y, yaw, radius, -roll)
+        if (math.hypot(gx - p[P_GX], gy - p[P_GY]) <= p[P_TOL_XY]
+                and abs(wrap(yaw - p[P_GYAW])) <= p[P_TOL_YAW]
+                and _motion_margin(clear, p, offx, offy, x, y, yaw, -roll, 0.0, 0.0, math.inf) >= 0.0):
+            counters[C_RESULT] = k
+            counters[C_SHOT_SEGS] = 0
+            return FOUND
+        # 3. Analytic expansion every N expansions, N shrinking as the goal gets closer (Nav2's rule).
+        h_here = _heuristic(htab, rs, p, x, y, yaw)
+        counters[C_SINCE_SHOT] += 1
+        if counters[C_SINCE_SHOT] >= max(1, int(h_here / p[P_SHOT_RATIO])):
+            counters[C_SINCE_SHOT] = 0
+            # forward-only: the Dubins shot is optimal, take it; with reversing a forward shot may be far
+            # longer than a manoeuvre with a reverse leg, so take it only when it is within 2× of h
+            n = try_shot(clear, p, offx, offy, x, y, yaw, roll, p[P_GX], p[P_GY], p[P_GYAW], 0.0,
+                         seg_roll, seg_curv, seg_len, 2.0 * h_here + 1e-6 if allow_reverse else math.inf)
+            if n > 0:
+                counters[C_RESULT] = k
+                counters[C_SHOT_SEGS] = n
+                return FOUND
+        # 4. Expand: every held roll, forward (and reverse), one exact step of eq. 1.
+        parent_dir = node_i[k, 2]
+        for d in range(2):
+            direction = 1 if d == 0 else -1
+            if direction < 0 and not allow_reverse:
+                break
+            for ri in range(n_roll):
+                d_roll = rolls[ri] - roll
+                margin = _motion_margin(clear, p, offx, offy, x, y, yaw, d_roll, curvs[ri], direction * step,
+                                        math.inf)
+                if margin < 0.0:
+                    continue
+                cx, cy = roll_shift(x, y, yaw, radius, d_roll)
+                cx, cy, cyaw = arc_step(cx, cy, yaw, curvs[ri], direction * step)
+                cyaw = wrap(cyaw)
+                ckey = _closed_key(p, w, cx, cy, cyaw, roll_bins[ri], n_roll_bins)
+                if closed[ckey >> 3] & (1 << (ckey & 7)):
+                    continue
+                h = _heuristic(htab, rs, p, cx, cy, cyaw)
+                if not math.isfinite(h):
+                    continue
+                # 5. Travel cost: length (incl. the sideways shift) × proximity, turning, reversing,
+                #    roll-change and direction-switch terms (eq. 14f with Nav2's cost terms).
+                shift = abs(radius * d_roll)
+                prox = 0.0
+                if p[P_PROX_RANGE] > 0.0:
+                    prox = max(0.0, 1.0 - margin / p[P_PROX_RANGE])
+                travel = (step + shift) * (1.0 + p[P_COST_PENALTY] * prox)
+                if abs(curvs[ri]) > 1e-12:
+                    travel *= p[P_NON_STRAIGHT]
+                if direction < 0:
+                    travel *= p[P_REVERSE]
+                travel += p[P_CHANGE] * shift
+                if parent_dir != 0 and parent_dir != direction:
+                    travel += p[P_SWITCH]
+                cg = g + travel
+                c = counters[C_NODES]
+                node_f[c, 0] = cx
+                node_f[c, 1] = cy
+                node_f[c, 2] = cyaw
+                node_f[c, 3] = rolls[ri]
+                node_f[c, 4] = cg
+                node_i[c, 0] = k
+                node_i[c, 1] = ri
+                node_i[c, 2] = direction
+                counters[C_NODES] = c + 1
+                heap_push(heap_keys, heap_vals, heap_size, cg + h * (1.0 + greed), c)
+    return RUNNING

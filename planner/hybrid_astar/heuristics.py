@@ -1,0 +1,200 @@
+"""Heuristics of the spherical Hybrid A* (paper 001 eq. 14g–i).
+
+* Holonomic cost-to-go with obstacles (eq. 14g): Dijkstra from the goal over a grid (optionally
+  downsampled, as Nav2's Smac planner does) where a cell is passable when the robot's centre could be
+  there, and each step costs its length × (1 + w·proximity), the same travel cost the search charges.
+  16-connected moves keep the grid metric within 2.7 % of Euclidean; the result is divided by that
+  factor and reduced by one coarse-cell diagonal, so it never exceeds the true cost (tested).
+* Dubins distance without obstacles (eq. 14h): :func:`planner.hybrid_astar.dubins.dubins_distance` at the robot's
+  minimum turning radius.
+
+``h = max(holonomic, dubins)`` and ``f = g + h·(1 + greed)`` (eq. 14i–j) are combined in the search.
+"""
+
+from __future__ import annotations
+
+import math
+from functools import lru_cache
+
+import numpy as np
+from numba import njit
+
+from planner.hybrid_astar.heap import heap_pop, heap_push
+
+# Worst-case ratio of the 16-connected grid metric to Euclidean distance.
+SIXTEEN_CONNECTED_RATIO = 1.0 / math.cos(math.atan2(1.0, 2.0) / 2.0)
+
+_MOVES = np.array(
+    [[1, 0], [-1, 0], [0, 1], [0, -1], [1, 1], [1, -1], [-1, 1], [-1, -1],
+     [2, 1], [1, 2], [-1, 2], [-2, 1], [-2, -1], [-1, -2], [1, -2], [2, -1]],
+    dtype=np.int64,
+)
+
+
+def proximity_cost(margin_m: np.ndarray | float, range_m: float) -> np.ndarray | float:
+    """Normalised proximity cost in [0, 1]: 1 touching the inflated obstacles, 0 beyond ``range_m``."""
+    if range_m <= 0:
+        return np.zeros_like(np.asarray(margin_m, float))
+    return np.clip(1.0 - np.asarray(margin_m, float) / range_m, 0.0, 1.0)
+
+
+def coarse_cost_grid(
+    clearance: np.ndarray, centre_threshold_m: float, circle_radius_m: float, prox_range_m: float,
+    cost_penalty: float, factor: int,
+) -> np.ndarray:
+    """Per coarse cell: multiplier 1 + w·proximity (the smallest over its fine cells), inf if impassable.
+
+    A fine cell is passable when its clearance ≥ ``centre_threshold_m``; the proximity uses the
+    clearance margin over ``circle_radius_m`` (an upper bound of the search's per-pose margin).
+    """
+    h, w = clearance.shape
+    hc, wc = -(-h // factor), -(-w // factor)
+    pad = np.full((hc * factor, wc * factor), -np.inf)
+    pad[:h, :w] = clearance
+    blocks = pad.reshape(hc, factor, wc, factor).max(axis=(1, 3))
+    prox = proximity_cost(blocks - circle_radius_m, prox_range_m)
+    mult = 1.0 + cost_penalty * np.asarray(prox, float)
+    mult[blocks < centre_threshold_m] = np.inf
+    return mult
+
+
+@njit(cache=True)
+def _dijkstra16(mult: np.ndarray, gx: int, gy: int, cell_m: float, sx: int, sy: int, stop_factor: float) -> np.ndarray:
+    """Cost-to-go from cell (gx, gy). Once the start cell (sx, sy) is settled at d_s, the wavefront stops
+    at stop_factor·d_s + 4 cells: every cell not settled by then gets the last settled cost, a lower
+    bound of its own, so the table stays admissible while the far side of a large map is skipped."""
+    h, w = mult.shape
+    dist = np.full((h, w), np.inf)
+    if not (0 <= gx < w and 0 <= gy < h) or not np.isfinite(mult[gy, gx]):
+        return dist
+    cap = h * w * _MOVES.shape[0] + 16  # each settled cell pushes at most one entry per move
+    keys = np.empty(cap)
+    vals = np.empty(cap, dtype=np.int64)
+    size = np.zeros(1, dtype=np.int64)
+    dist[gy, gx] = 0.0
+    heap_push(keys, vals, size, 0.0, gy * w + gx)
+    done = np.zeros((h, w), dtype=np.bool_)
+    stop = math.inf
+    d = 0.0
+    while size[0] > 0:
+        d, idx = heap_pop(keys, vals, size)
+        cy = idx // w
+        cx = idx - cy * w
+        if done[cy, cx]:
+            continue
+        if d > stop:
+            break
+        done[cy, cx] = True
+        if cx == sx and cy == sy:
+            stop = stop_factor * d + 4.0 * cell_m
+        for k in range(_MOVES.shape[0]):
+            mx = _MOVES[k, 0]
+            my = _MOVES[k, 1]
+            nx = cx + mx
+            ny = cy + my
+            if nx < 0 or ny < 0 or nx >= w or ny >= h or done[ny, nx]:
+                continue
+            m = mult[ny, nx]
+            if not np.isfinite(m):
+                continue
+            if abs(mx) + abs(my) == 3:
+                # knight move: both cells it passes must be open
+                ax = cx + (mx // 2 if abs(mx) == 2 else 0)
+                ay = cy + (my // 2 if abs(my) == 2 else 0)
+                bx = cx + (mx if abs(mx) == 1 else mx // 2)
+                by = cy + (my if abs(my) == 1 else my // 2)
+                if not (np.isfinite(mult[ay, ax]) and np.isfinite(mult[by, bx])):
+                    continue
+            elif abs(mx) + abs(my) == 2:
+                if not (np.isfinite(mult[cy, nx]) and np.isfinite(mult[ny, cx])):
+                    continue
+            step = math.sqrt(mx * mx + my * my) * cell_m * 0.5 * (m + mult[cy, cx])
+            nd = d + step
+            if nd < dist[ny, nx]:
+                dist[ny, nx] = nd
+                heap_push(keys, vals, size, nd, ny * w + nx)
+    if size[0] > 0:
+        for iy in range(h):
+            for ix in range(w):
+                if not done[iy, ix] and np.isfinite(mult[iy, ix]):
+                    dist[iy, ix] = d
+    return dist
+
+
+@lru_cache(maxsize=4)
+def reeds_shepp_table(rho: float, n_yaw: int = 72, cell_m: float = 0.1, half_width_m: float = 0.0) -> np.ndarray:
+    """Reeds–Shepp distance to a goal at the origin (heading 0), from OMPL's ``ReedsSheppStateSpace``.
+
+    Used as the non-holonomic heuristic when reversing is allowed (Dubins is not a lower bound then).
+    Sampled every ``cell_m`` over ±``half_width_m`` (default max(3 m, 3ρ)) and every 2π/``n_yaw``, then
+    each bin holds the minimum over its 8 corner samples less one cell, so a lookup at any pose inside the
+    bin does not exceed OMPL's distance there (checked on random poses in the tests). Shape (n_yaw, 2n, 2n) with
+    n = half_width / cell; built once per (ρ, bins) in a process (≈ 0.6 s).
+    """
+    from ompl import base as ob
+
+    half = half_width_m or max(3.0, 3.0 * rho)
+    n = round(half / cell_m)
+    space = ob.ReedsSheppStateSpace(rho)
+    state, goal = space.allocState(), space.allocState()
+    goal.setX(0.0)
+    goal.setY(0.0)
+    goal.setYaw(0.0)
+    coords = (np.arange(2 * n + 1) - n) * cell_m
+    samples = np.empty((n_yaw + 1, 2 * n + 1, 2 * n + 1))
+    for k in range(n_yaw + 1):
+        yaw = -math.pi + 2.0 * math.pi * k / n_yaw
+        state.setYaw(yaw if yaw < math.pi else -math.pi)  # OMPL's SO(2) is [−π, π)
+        for j, y in enumerate(coords):
+            state.setY(float(y))
+            for i, x in enumerate(coords):
+                state.setX(float(x))
+                samples[k, j, i] = space.distance(state, goal)
+    corners = [samples[dk:dk + n_yaw, dj:dj + 2 * n, di:di + 2 * n] for dk in (0, 1) for dj in (0, 1) for di in (0, 1)]
+    # the distance is not monotone inside a bin (it dips by a few mm between corners): keep a cell of margin
+    return np.maximum(np.minimum.reduce(corners) - cell_m, 0.0)
+
+
+def auto_downsample(shape: tuple[int, ...], max_cells: int = 50_000) -> int:
+    """Smallest factor ≥ 2 that brings a grid of ``shape`` to at most ``max_cells`` coarse cells."""
+    cells = int(shape[0]) * int(shape[1])
+    return max(2, math.ceil(math.sqrt(cells / max_cells)))
+
+
+class HolonomicHeuristic:
+    """Admissible holonomic cost-to-go (m, weighted like the search's travel cost) from one goal.
+
+    Parameters
+    ----------
+    mult : (h, w) coarse cost multipliers from :func:`coarse_cost_grid` (inf = impassable); it does not
+        depend on the goal, so a planner builds it once per map.
+    origin_xy : the grid's origin (m).
+    cell_m : coarse cell size (m) = fine resolution × downsampling factor.
+    goal_xy : goal position (m).
+    start_xy : when given, the wavefront stops at ``stop_factor`` × the start's cost (+ 4 cells); cells
+        beyond get that cost as a lower bound. Nodes that far away have f = g + h·(1 + greed) above the
+        goal's, so the search never needs their exact value.
+    """
+
+    def __init__(self, mult: np.ndarray, origin_xy: tuple[float, float], cell_m: float,
+                 goal_xy: tuple[float, float], start_xy: tuple[float, float] | None = None,
+                 stop_factor: float = 2.0) -> None:
+        self.cell_m = cell_m
+        self.origin_xy = origin_xy
+        gx = math.floor((goal_xy[0] - origin_xy[0]) / cell_m)
+        gy = math.floor((goal_xy[1] - origin_xy[1]) / cell_m)
+        sx, sy = (-1, -1) if start_xy is None else (math.floor((start_xy[0] - origin_xy[0]) / cell_m),
+                                                     math.floor((start_xy[1] - origin_xy[1]) / cell_m))
+        raw = _dijkstra16(mult, gx, gy, cell_m, sx, sy, stop_factor)
+        # Within one coarse cell the grid knows nothing: allow a diagonal of slack at each end, and
+        # undo the 16-connected metric's overestimate of Euclidean length.
+        slack = 2.0 * math.sqrt(2.0) * cell_m
+        self.table = np.maximum(raw / SIXTEEN_CONNECTED_RATIO - slack, 0.0)
+
+    def __call__(self, x: float, y: float) -> float:
+        ix = math.floor((x - self.origin_xy[0]) / self.cell_m)
+        iy = math.floor((y - self.origin_xy[1]) / self.cell_m)
+        h, w = self.table.shape
+        if 0 <= ix < w and 0 <= iy < h:
+            return float(self.table[iy, ix])
+        return math.inf

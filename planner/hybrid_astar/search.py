@@ -1,0 +1,432 @@
+"""Spherical Hybrid A* (paper 001 §4.1, eq. 14, with the corrections listed in docs/references.md).
+
+The search state is (x, y, yaw, roll). A child holds one roll from a discrete set spread evenly in
+curvature over [−φmax, φmax]; switching roll first rolls the shell sideways by r·Δφ (eq. 1), then the
+child rolls one exact arc of eq. 1 whose length is at least a cell diagonal (and long enough for the
+tightest turn to change heading by one yaw bin). Nodes are closed on (cell, yaw bin, roll index).
+
+g sums length (sideways shifts included) × (1 + cost_penalty·proximity), a non-straight multiplier,
+a roll-change cost, a reverse multiplier and a direction-switch cost (eq. 14f, with Nav2 Smac's terms);
+h = max(holonomic cost-to-go with obstacles, Dubins distance at the minimum turning radius) (eq. 14g–i);
+f = g + h·(1 + greed) (eq. 14j). Every few expansions an analytic Dubins shot to the goal is tried,
+turned into roll-held segments whose sideways shifts are compensated, and collision-checked.
+
+The loop runs compiled (:mod:`planner.hybrid_astar.core`) in chunks; between chunks this driver checks the
+deadline, the iteration cap and cancellation, and grows the node storage.
+
+Algorithm outline (numbered like the compiled loop):
+ 1. pop the cheapest open node; skip it if its (cell, yaw bin, roll) key is closed, else close it;
+ 2. goal test (after returning the roll to 0);
+ 3. analytic expansion every max(1, h / ratio) expansions;
+ 4. expand children (each roll, forward and optionally reverse), collision-checked at ≤ half a cell;
+ 5. cost them and push them.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, fields, replace
+from typing import Any
+
+import numpy as np
+
+from planner.errors import (
+    GoalOccupied,
+    GoalOutsideMap,
+    InvalidInput,
+    NoValidPathFound,
+    PlannerCancelled,
+    PlannerTimedOut,
+    StartOccupied,
+    StartOutsideMap,
+)
+from planner.hybrid_astar import core
+from planner.hybrid_astar.heuristics import HolonomicHeuristic, auto_downsample, coarse_cost_grid, reeds_shepp_table
+from planner.kinematics import child_pose, densify_motions, wrap_angle
+from planner.maps.clearance import CircleFootprint, ClearanceMap
+from planner.occupancy import OccupancyGrid
+from planner.result import PlanResult, build_states
+from planner.robot import RobotProfile
+
+log = logging.getLogger(__name__)
+
+RS_CELL_M = 0.1  # sampling of the Reeds–Shepp heuristic table (m)
+CLOSED_SET_BUDGET_MB = 1024  # the closed-set bitset of one plan may not exceed this (≈ 9000² cells at defaults)
+
+
+@dataclass(frozen=True)
+class PlannerOptions:
+    """Parameters of the spherical Hybrid A* (SI units, radians). Defaults follow Nav2 Smac where the
+    paper is silent."""
+
+    n_rolls: int = 7                  # discrete held rolls in [−φmax, φmax] (odd, ≥ 5), even in curvature
+    n_yaw_bins: int = 72              # closed-set heading bins (5°)
+    n_roll_bins: int = 3              # closed-set roll bins (left/upright/right; 0 = one per held roll)
+    step_m: float = 0.0               # arc length per expansion; 0 = automatic (see ``resolved_step``)
+    allow_reverse: bool = False
+    n_circles: int = 3                # covering circles of the footprint (paper 001 Fig. 6)
+    allow_unknown: bool = False
+    goal_tolerance_m: float = 0.1
+    goal_tolerance_yaw_rad: float = math.radians(5.0)
+    non_straight_penalty: float = 1.03
+    change_penalty: float = 0.1       # per metre of sideways shift caused by a roll change
+    reverse_penalty: float = 1.2       # a sphere rolls backwards as well as forwards (Nav2 uses 2.0 for cars)
+    switch_cost_m: float = 1.0
+    cost_penalty: float = 2.0         # proximity weight (Nav2 ``cost_penalty``, same default)
+    proximity_range_m: float = 1.0    # proximity cost fades to 0 this far beyond the inflated obstacles
+    greed: float = 1.0               # eq. 14j; 0 = admissible A* (slow: 7 rolls × 72 bins); smoothing recovers length
+    analytic_ratio_m: float = 3.5     # try a Dubins shot every max(1, h / ratio) expansions
+    heuristic_downsample: int = 0     # holonomic grid coarsening; 0 = auto (≥ 2, at most ~50k coarse cells)
+    time_limit_s: float = 5.0
+    max_iterations: int = 2_000_000
+    chunk_expansions: int = 2000
+    state_spacing_m: float = 0.04     # spacing of the returned states (≤ 5 cm, docs/contracts.md)
+    smooth: bool = True               # shortcut the search's path with collision-checked rollable Dubins shots
+    smooth_max_tries: int = 24        # candidate shortcut targets tried per path knot
+    smooth_passes: int = 3            # shortcut passes; later passes re-subdivide the path (≈ 2 % shorter)
+
+    def validate(self) -> None:
+        """Raise :class:`InvalidInput` naming the first bad option."""
+        def need(ok: bool, name: str, msg: str) -> None:
+            if not ok:
+                raise InvalidInput(f"options.{name}", msg)
+
+        for f in fields(self):
+            value = getattr(self, f.name)
+            if isinstance(value, float):
+                need(math.isfinite(value), f.name, f"must be finite, got {value!r}")
+        need(5 <= self.n_rolls <= 31 and self.n_rolls % 2 == 1, "n_rolls", "must be an odd number in [5, 31]")
+        need(8 <= self.n_yaw_bins <= 720, "n_yaw_bins", "must be in [8, 720]")
+        need(self.n_roll_bins == 0 or (3 <= self.n_roll_bins <= self.n_rolls and self.n_roll_bins % 2 == 1),
+             "n_roll_bins", "must be 0 (one per held roll) or an odd number in [3, n_rolls]")
+        need(self.step_m >= 0, "step_m", "must be ≥ 0 (0 = automatic)")
+        need(1 <= self.n_circles <= 16, "n_circles", "must be in [1, 16]")
+        need(self.goal_tolerance_m > 0, "goal_tolerance_m", "must be > 0")
+        need(self.goal_tolerance_yaw_rad > 0, "goal_tolerance_yaw_rad", "must be > 0")
+        for name in ("non_straight_penalty", "reverse_penalty"):
+            need(getattr(self, name) >= 1.0, name, "must be ≥ 1")
+        for name in ("change_penalty", "switch_cost_m", "cost_penalty", "proximity_range_m", "greed"):
+            need(getattr(self, name) >= 0.0, name, "must be ≥ 0")
+        need(self.analytic_ratio_m > 0, "analytic_ratio_m", "must be > 0")
+        need(0 <= self.heuristic_downsample <= 8, "heuristic_downsample", "must be in [0, 8] (0 = auto)")
+        need(self.time_limit_s > 0, "time_limit_s", "must be > 0")
+        need(0 < self.max_iterations <= 50_000_000, "max_iterations", "must be in [1, 50 000 000]")
+        need(1 <= self.chunk_expansions <= 1_000_000, "chunk_expansions", "must be in [1, 1 000 000]")
+        need(0 < self.state_spacing_m <= 0.05, "state_spacing_m", "must be in (0, 0.05]")
+        need(1 <= self.smooth_max_tries <= 1000, "smooth_max_tries", "must be in [1, 1000]")
+        need(1 <= self.smooth_passes <= 20, "smooth_passes", "must be in [1, 20]")
+
+    @classmethod
+    def from_dict(cls, data: dict[str, Any]) -> PlannerOptions:
+        """Options from a JSON object; unknown keys and wrong types are rejected by name."""
+        known = {f.name: f for f in fields(cls)}
+        values: dict[str, Any] = {}
+        for key, value in data.items():
+            if key not in known:
+                raise InvalidInput(f"options.{key}", f"unknown option; known: {', '.join(sorted(known))}")
+            default = getattr(cls(), key)
+            if isinstance(default, bool):
+                if not isinstance(value, bool):
+                    raise InvalidInput(f"options.{key}", f"must be true or false, got {value!r}")
+            elif isinstance(default, int):
+                if isinstance(value, bool) or not isinstance(value, int):
+                    raise InvalidInput(f"options.{key}", f"must be an integer, got {value!r}")
+            elif isinstance(value, bool) or not isinstance(value, int | float):
+                raise InvalidInput(f"options.{key}", f"must be a number, got {value!r}")
+            values[key] = type(default)(value)
+        opts = cls(**values)
+        opts.validate()
+        return opts
+
+
+Pose = tuple[float, float, float]
+
+
+class HybridAStar:
+    """Plans rollable paths for one robot on one map; reuse it for many queries on the same map.
+
+    ``HybridAStar(grid, robot, options).plan(start, goal)`` returns a :class:`PlanResult` or raises a
+    :class:`~planner.errors.PlanningError` subclass carrying the Nav2 error code.
+    """
+
+    def __init__(self, grid: OccupancyGrid, robot: RobotProfile, options: PlannerOptions | None = None) -> None:
+        self.options = options or PlannerOptions()
+        self.options.validate()
+        n_bins = self.options.n_roll_bins or self.options.n_rolls
+        closed_mb = grid.width * grid.height * self.options.n_yaw_bins * n_bins / 8 / 2**20
+        if closed_mb > CLOSED_SET_BUDGET_MB:
+            raise InvalidInput(
+                "options.n_yaw_bins",
+                f"the closed set for this map ({grid.width}×{grid.height} cells × {self.options.n_yaw_bins} yaw bins × "
+                f"{n_bins} roll bins) would need {closed_mb:.0f} MB, over the {CLOSED_SET_BUDGET_MB} MB budget; "
+                "use fewer yaw or roll bins",
+            )
+        self.grid = grid
+        self.robot = robot
+        self.footprint = CircleFootprint.for_robot(robot, self.options.n_circles)
+        self.clearance = ClearanceMap(grid, self.options.allow_unknown)
+        kmax = robot.max_curvature
+        kappas = np.linspace(-kmax, kmax, self.options.n_rolls)
+        kappas[self.options.n_rolls // 2] = 0.0
+        self.curvatures = kappas
+        self.rolls = np.asarray(robot.roll_model.roll_for_curvature(kappas), dtype=float)
+        self.rolls[-1], self.rolls[0] = robot.max_roll_rad, -robot.max_roll_rad
+        # roll index → closed-set bin: equal curvature intervals, upright always in the middle bin
+        self.roll_bins = np.rint((kappas / kmax + 1.0) / 2.0 * (n_bins - 1)).astype(np.int64)
+        self.n_roll_bins = n_bins
+        offsets = np.hypot(self.footprint.offsets_x, self.footprint.offsets_y)
+        self.centre_threshold_m = self.footprint.radius_m - float(offsets.min()) - grid.resolution_m
+        o = self.options
+        self.rs_table = (reeds_shepp_table(robot.min_turning_radius_m, o.n_yaw_bins, RS_CELL_M) if o.allow_reverse
+                         else np.zeros((1, 1, 1)))
+        self.heuristic_factor = o.heuristic_downsample or auto_downsample(grid.data.shape)
+        self.holonomic_mult = coarse_cost_grid(self.clearance.clearance, self.centre_threshold_m,
+                                               self.footprint.radius_m, o.proximity_range_m, o.cost_penalty,
+                                               self.heuristic_factor)
+
+    def holonomic(self, goal_xy: tuple[float, float], start_xy: tuple[float, float] | None = None
+                  ) -> HolonomicHeuristic:
+        """The holonomic cost-to-go table towards ``goal_xy`` (eq. 14g), cut off beyond twice the start's
+        cost when ``start_xy`` is given."""
+        return HolonomicHeuristic(self.holonomic_mult, (self.clearance.origin_x, self.clearance.origin_y),
+                                  self.grid.resolution_m * self.heuristic_factor, goal_xy, start_xy)
+
+    @property
+    def resolved_step_m(self) -> float:
+        """Arc length of one expansion: the option, or max(cell diagonal, R_min × yaw bin)."""
+        if self.options.step_m > 0:
+            return max(self.options.step_m, math.sqrt(2) * self.grid.resolution_m)
+        yaw_bin = 2 * math.pi / self.options.n_yaw_bins
+        return max(math.sqrt(2) * self.grid.resolution_m, self.robot.min_turning_radius_m * yaw_bin)
+
+    def pose_margin(self, pose: Pose) -> float:
+        """Footprint margin (m) at a pose: ≥ 0 means free."""
+        return float(self.clearance.pose_margin(self.footprint, np.array([pose]))[0])
+
+    def _params(self, goal: Pose) -> np.ndarray:
+        o = self.options
+        p = np.zeros(core.N_PARAMS)
+        p[core.P_OX], p[core.P_OY] = self.clearance.origin_x, self.clearance.origin_y
+        p[core.P_RES] = self.grid.resolution_m
+        p[core.P_RC] = self.footprint.radius_m
+        p[core.P_RHO] = self.robot.min_turning_radius_m
+        p[core.P_GX], p[core.P_GY], p[core.P_GYAW] = goal
+        p[core.P_TOL_XY], p[core.P_TOL_YAW] = o.goal_tolerance_m, o.goal_tolerance_yaw_rad
+        p[core.P_RADIUS] = self.robot.radius_m
+        p[core.P_STEP] = self.resolved_step_m
+        p[core.P_SPACING] = 0.5 * self.grid.resolution_m
+        p[core.P_NON_STRAIGHT], p[core.P_CHANGE] = o.non_straight_penalty, o.change_penalty
+        p[core.P_REVERSE], p[core.P_SWITCH] = o.reverse_penalty, o.switch_cost_m
+        p[core.P_COST_PENALTY], p[core.P_PROX_RANGE] = o.cost_penalty, o.proximity_range_m
+        p[core.P_GREED], p[core.P_SHOT_RATIO] = o.greed, o.analytic_ratio_m
+        p[core.P_MAX_ROLL] = self.robot.max_roll_rad
+        p[core.P_USE_DUBINS] = 0.0 if o.allow_reverse else 1.0
+        p[core.P_USE_RS] = 1.0 if o.allow_reverse else 0.0
+        p[core.P_RS_CELL] = RS_CELL_M
+        p[core.P_RS_HALF] = self.rs_table.shape[2] // 2
+        p[core.P_ALLOW_REVERSE] = 1.0 if o.allow_reverse else 0.0
+        p[core.P_N_YAW] = o.n_yaw_bins
+        return p
+
+    def _check_endpoint(self, pose: Pose, which: str) -> None:
+        for v in pose:
+            if not math.isfinite(v):
+                raise InvalidInput(which, f"must be three finite numbers, got {list(pose)!r}")
+        if not self.grid.contains(pose[0], pose[1]):
+            cls = StartOutsideMap if which == "start" else GoalOutsideMap
+            raise cls(f"{which} ({pose[0]:.3f}, {pose[1]:.3f}) is outside the map {self.grid.name!r}")
+        margin = self.pose_margin(pose)
+        if margin < 0:
+            cls2 = StartOccupied if which == "start" else GoalOccupied
+            why = ("the footprint's covering circles reach beyond the map's edge" if math.isinf(margin) else
+                   f"the footprint's covering circles are {-margin:.3f} m too close to an obstacle")
+            raise cls2(f"{which} ({pose[0]:.3f}, {pose[1]:.3f}) is in collision: {why}")
+
+    def plan(
+        self, start: Pose, goal: Pose, *, time_limit_s: float | None = None,
+        cancel: Callable[[], bool] | None = None,
+    ) -> PlanResult:
+        """Plan from ``start`` to ``goal`` (x, y, yaw in the map frame; the sphere starts and ends upright)."""
+        t0 = time.perf_counter()
+        o = self.options if time_limit_s is None else replace(self.options, time_limit_s=time_limit_s)
+        o.validate()
+        deadline = t0 + o.time_limit_s
+        start = (float(start[0]), float(start[1]), float(wrap_angle(float(start[2]))))
+        goal = (float(goal[0]), float(goal[1]), float(wrap_angle(float(goal[2]))))
+        self._check_endpoint(start, "start")
+        self._check_endpoint(goal, "goal")
+        heur = self.holonomic(goal[:2], start[:2])
+        if not math.isfinite(heur(start[0], start[1])):
+            raise NoValidPathFound(
+                f"no path: the goal ({goal[0]:.2f}, {goal[1]:.2f}) cannot be reached from the start "
+                f"({start[0]:.2f}, {start[1]:.2f}) by any route wide enough for the robot"
+            )
+        p = self._params(goal)
+        p[core.P_HOX], p[core.P_HOY] = heur.origin_xy
+        p[core.P_HCELL] = heur.cell_m
+        n_keys = self.grid.width * self.grid.height * o.n_yaw_bins * self.n_roll_bins
+        closed = np.zeros(n_keys // 8 + 1, dtype=np.uint8)
+        cap = 1 << 16
+        node_f = np.empty((cap, 5))
+        node_i = np.empty((cap, 3), dtype=np.int64)
+        heap_keys = np.empty(cap * 2)
+        heap_vals = np.empty(cap * 2, dtype=np.int64)
+        heap_size = np.zeros(1, dtype=np.int64)
+        counters = np.zeros(8, dtype=np.int64)
+        seg_roll, seg_curv, seg_len = (np.zeros(core.MAX_SHOT_SEGS) for _ in range(3))
+        mid = o.n_rolls // 2
+        node_f[0] = (*start, 0.0, 0.0)
+        node_i[0] = (-1, mid, 0)
+        counters[core.C_NODES] = 1
+        h0 = heur(start[0], start[1])
+        core.heap_push(heap_keys, heap_vals, heap_size, h0, 0)
+        status = core.RUNNING
+        while True:
+            budget = min(o.chunk_expansions, o.max_iterations - int(counters[core.C_EXPANSIONS]))
+            status = core.search_chunk(
+                self.clearance.clearance, heur.table, self.rs_table, p, self.footprint.offsets_x,
+                self.footprint.offsets_y,
+                self.rolls, self.curvatures, self.roll_bins, self.n_roll_bins, node_f, node_i, heap_keys, heap_vals,
+                heap_size, closed, counters,
+                budget, seg_roll, seg_curv, seg_len,
+            )
+            if status == core.FOUND:
+                break
+            if status == core.EXHAUSTED:
+                raise NoValidPathFound(
+                    f"no valid path: the search exhausted every reachable state "
+                    f"({int(counters[core.C_EXPANSIONS])} expansions)"
+                )
+            if status == core.FULL:
+                node_f = np.concatenate([node_f, np.empty_like(node_f)])
+                node_i = np.concatenate([node_i, np.empty_like(node_i)])
+                heap_keys = np.concatenate([heap_keys, np.empty_like(heap_keys)])
+                heap_vals = np.concatenate([heap_vals, np.empty_like(heap_vals)])
+                continue
+            if counters[core.C_EXPANSIONS] >= o.max_iterations:
+                raise NoValidPathFound(f"no valid path within the iteration cap of {o.max_iterations} expansions")
+            if cancel is not None and cancel():
+                raise PlannerCancelled("planning was cancelled")
+            if time.perf_counter() > deadline:
+                raise PlannerTimedOut(
+                    f"no path found within the time limit of {o.time_limit_s:g} s "
+                    f"({int(counters[core.C_EXPANSIONS])} expansions)"
+                )
+        motions = self._motions(node_f, node_i, int(counters[core.C_RESULT]),
+                                seg_roll, seg_curv, seg_len, int(counters[core.C_SHOT_SEGS]))
+        raw_length = self._length(start, motions)
+        t_search = time.perf_counter() - t0
+        if o.smooth:
+            length = raw_length
+            for k in range(o.smooth_passes):
+                candidate = self._shortcut(start, self._subdivide(motions) if k else motions, p,
+                                           o.smooth_max_tries)
+                new_length = self._length(start, candidate)
+                if new_length > length - 1e-3:
+                    break
+                motions, length = candidate, new_length
+        t_smooth = time.perf_counter() - t0 - t_search
+        poses = self._densify(start, motions, o.state_spacing_m)
+        fine = self._densify(start, motions, self.grid.resolution_m / 4)
+        margins = self.clearance.pose_margin(self.footprint, fine[:, :3])
+        # The distance-transform margin is a lower bound of the exact one (by at most √2·res + one cell):
+        # only poses that could be the closest or in contact need the exact check.
+        near = margins <= margins.min() + 3.0 * self.grid.resolution_m
+        margins = self.clearance.exact_pose_margin(self.footprint, fine[near, :3])
+        if margins.min() < 0:
+            raise NoValidPathFound(
+                f"internal check failed: the exact re-check of the final path found a collision "
+                f"({-margins.min():.3f} m deep)"
+            )
+        elapsed = time.perf_counter() - t0
+        return PlanResult(
+            status="exact",
+            error_code=0,
+            error_msg="",
+            planning_time_s=elapsed,
+            expansions=int(counters[core.C_EXPANSIONS]),
+            robot=self.robot,
+            map_name=self.grid.name,
+            start=start,
+            goal=goal,
+            states=build_states(poses, self.robot),
+            min_clearance_m=float(margins.min()),
+            analytic_segments=int(counters[core.C_SHOT_SEGS]),
+            extra={"unsmoothed_length_m": raw_length, "search_time_s": t_search, "smoothing_time_s": t_smooth},
+        )
+
+    def _knots(self, start: Pose, motions: list[tuple[float, float, float]]) -> np.ndarray:
+        """Pose (x, y, yaw, roll) and distance travelled at the start and after every motion: (n+1, 5)."""
+        x, y, yaw = start
+        roll, dist = 0.0, 0.0
+        rows = [(x, y, yaw, roll, dist)]
+        for held, curv, s in motions:
+            x2, y2, yaw2 = child_pose(x, y, yaw, roll, held, curv, self.robot.radius_m, s)
+            dist += abs(s) + self.robot.radius_m * abs(held - roll)
+            x, y, yaw, roll = x2, y2, yaw2, held
+            rows.append((x, y, yaw, roll, dist))
+        return np.array(rows)
+
+    def _subdivide(self, motions: list[tuple[float, float, float]]) -> list[tuple[float, float, float]]:
+        """Split motions longer than one search step into equal pieces (more knots to shortcut from)."""
+        step = self.resolved_step_m
+        out: list[tuple[float, float, float]] = []
+        for held, curv, s in motions:
+            n = max(1, math.ceil(abs(s) / step - 1e-9))
+            out.extend([(held, curv, s / n)] * n)
+        return out
+
+    def _length(self, start: Pose, motions: list[tuple[float, float, float]]) -> float:
+        return float(self._knots(start, motions)[-1, 4])
+
+    def _shortcut(
+        self, start: Pose, motions: list[tuple[float, float, float]], p: np.ndarray, max_tries: int
+    ) -> list[tuple[float, float, float]]:
+        """Replace runs of motions by shorter, collision-free rollable Dubins shots (see ``core.shortcut``)."""
+        knots = self._knots(start, motions)
+        n = len(knots)
+        out_ij = np.zeros((n, 2), dtype=np.int64)
+        out_roll, out_curv, out_len = (np.zeros((n, core.MAX_SHOT_SEGS)) for _ in range(3))
+        out_n = np.zeros(n, dtype=np.int64)
+        count = core.shortcut(self.clearance.clearance, p, self.footprint.offsets_x, self.footprint.offsets_y,
+                              np.ascontiguousarray(knots[:, :4]), np.ascontiguousarray(knots[:, 4]), max_tries,
+                              out_ij, out_roll, out_curv, out_len, out_n)
+        result: list[tuple[float, float, float]] = []
+        k = 0
+        for c in range(count):
+            i, j = int(out_ij[c, 0]), int(out_ij[c, 1])
+            result.extend(motions[k:i])
+            result.extend((float(out_roll[c, m]), float(out_curv[c, m]), float(out_len[c, m]))
+                          for m in range(int(out_n[c])))
+            end_roll = float(knots[j, 3])
+            result.append((end_roll, float(self.robot.roll_model.curvature(end_roll)), 0.0))
+            k = j
+        result.extend(motions[k:])
+        return result
+
+    def _motions(
+        self, node_f: np.ndarray, node_i: np.ndarray, result: int,
+        seg_roll: np.ndarray, seg_curv: np.ndarray, seg_len: np.ndarray, n_shot: int,
+    ) -> list[tuple[float, float, float]]:
+        """The path as a list of (held roll, curvature, signed arc length) motions, ending upright."""
+        chain = []
+        k = result
+        while node_i[k, 0] >= 0:
+            chain.append(k)
+            k = int(node_i[k, 0])
+        chain.reverse()
+        step = self.resolved_step_m
+        motions = [(float(node_f[k, 3]), float(self.curvatures[node_i[k, 1]]), float(node_i[k, 2]) * step)
+                   for k in chain]
+        motions += [(float(seg_roll[i]), float(seg_curv[i]), float(seg_len[i])) for i in range(n_shot)]
+        motions.append((0.0, 0.0, 0.0))
+        return motions
+
+    def _densify(self, start: Pose, motions: list[tuple[float, float, float]], spacing: float) -> np.ndarray:
+        """Dense poses (x, y, yaw, roll, direction) along the motions, ≤ ``spacing`` apart."""
+        return densify_motions(np.array(start, float), np.array(motions, float).reshape(-1, 3),
+                               self.robot.radius_m, spacing)
+

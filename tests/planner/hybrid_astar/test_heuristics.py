@@ -1,0 +1,134 @@
+"""The holonomic heuristic never exceeds the true cost."""
+
+import math
+
+import numpy as np
+from scipy.spatial import ConvexHull
+
+from planner.hybrid_astar.search import HybridAStar, PlannerOptions
+from planner.occupancy import OccupancyGrid
+from planner.robot import load_robot
+
+
+def test_never_exceeds_euclidean_in_open_space():
+    grid = OccupancyGrid.from_occupied(np.zeros((200, 200), bool), 0.05)
+    planner = HybridAStar(grid, load_robot(), PlannerOptions(cost_penalty=0.0))
+    goal = (5.0, 5.0)
+    h = planner.holonomic(goal)
+    rng = np.random.default_rng(5)
+    for x, y in rng.uniform(1.0, 9.0, (500, 2)):
+        assert h(x, y) <= math.hypot(x - goal[0], y - goal[1]) + 1e-9
+
+
+def _geodesic_around(p, g, obstacle):
+    """Shortest path length from p to g around a convex obstacle (polygon points) that blocks the segment:
+    the shorter chain between p and g on the convex hull of the obstacle and both points."""
+    pts = np.vstack([obstacle, p, g])
+    hull = ConvexHull(pts).vertices.tolist()
+    ip, ig = hull.index(len(pts) - 2), hull.index(len(pts) - 1)
+    ring = pts[hull]
+    seg = np.hypot(*np.diff(np.vstack([ring, ring[:1]]), axis=0).T)
+    i, j = sorted((ip, ig))
+    one_way = seg[i:j].sum()
+    return min(one_way, seg.sum() - one_way)
+
+
+def test_never_exceeds_the_geodesic_around_a_wall():
+    """Every valid pose keeps the centre circle (radius r_c, at the robot's centre) off the wall, so a
+    path's length is at least the geodesic of a point around the wall inflated by r_c. With no proximity
+    cost that is a lower bound of the true cost; the heuristic may not exceed it."""
+    occ = np.zeros((240, 240), bool)
+    occ[:3] = occ[-3:] = True
+    occ[:, :3] = occ[:, -3:] = True
+    occ[0:160, 115:125] = True                # wall x ∈ [5.75, 6.25], y ∈ [0, 8]
+    grid = OccupancyGrid.from_occupied(occ, 0.05)
+    planner = HybridAStar(grid, load_robot(), PlannerOptions(cost_penalty=0.0))
+    r_c = planner.footprint.radius_m
+    assert np.min(np.hypot(planner.footprint.offsets_x, planner.footprint.offsets_y)) == 0.0
+    angles = np.linspace(0, 2 * np.pi, 721)
+    # polygon inscribed in (wall ⊕ disk r_c): a lower bound of the true inflated obstacle
+    corners = [(5.75, 8.0), (6.25, 8.0), (5.75, -1e4), (6.25, -1e4)]  # the wall meets the border: no way below
+    inflated = np.vstack([np.column_stack([cx + r_c * np.cos(angles), cy + r_c * np.sin(angles)])
+                          for cx, cy in corners])
+    goal = (10.0, 2.0)
+    h = planner.holonomic(goal)
+    rng = np.random.default_rng(9)
+    checked = 0
+    for x, y in rng.uniform([0.5, 0.5], [5.3, 7.5], (300, 2)):
+        if not math.isfinite(h(x, y)):
+            continue
+        assert h(x, y) <= _geodesic_around((x, y), goal, inflated) + 1e-9
+        checked += 1
+    assert checked > 100
+
+
+def test_heuristic_is_not_trivially_small():
+    """A heuristic of zero would pass the bounds above: it must also be close to the geodesic."""
+    grid = OccupancyGrid.from_occupied(np.zeros((200, 200), bool), 0.05)
+    planner = HybridAStar(grid, load_robot(), PlannerOptions(cost_penalty=0.0))
+    h = planner.holonomic((5.0, 5.0))
+    assert h(9.0, 5.0) >= 0.85 * 4.0
+
+
+def test_cut_off_wavefront_is_a_lower_bound_of_the_full_one():
+    occ = np.zeros((300, 400), bool)
+    occ[:3] = occ[-3:] = True
+    occ[:, :3] = occ[:, -3:] = True
+    occ[0:200, 195:205] = True
+    grid = OccupancyGrid.from_occupied(occ, 0.05)
+    planner = HybridAStar(grid, load_robot())
+    goal, start = (3.0, 3.0), (6.0, 4.0)
+    full = planner.holonomic(goal).table
+    cut = planner.holonomic(goal, start).table
+    finite = np.isfinite(full)
+    assert np.all(cut[finite] <= full[finite] + 1e-9)
+    assert np.isfinite(cut[finite]).all()
+    h_start = planner.holonomic(goal, start)(*start)
+    near = full <= 1.5 * h_start
+    assert np.allclose(cut[near], full[near])
+    assert (cut < full - 1e-6).any()  # the far side really was cut off
+
+
+def test_reeds_shepp_table_never_exceeds_ompl():
+    """Each bin of the table holds the minimum of its corner samples: a lookup anywhere inside the bin is
+    at most OMPL's Reeds–Shepp distance at that pose (and close to it)."""
+    from ompl import base as ob
+
+    from planner.hybrid_astar.heuristics import reeds_shepp_table
+
+    rho, n_yaw, cell = 1.12, 72, 0.1
+    table = reeds_shepp_table(rho, n_yaw, cell)
+    n = table.shape[2] // 2
+    space = ob.ReedsSheppStateSpace(rho)
+    state, goal = space.allocState(), space.allocState()
+    goal.setX(0.0)
+    goal.setY(0.0)
+    goal.setYaw(0.0)
+    rng = np.random.default_rng(4)
+    gaps = []
+    for x, y, yaw in zip(rng.uniform(-n * cell, n * cell, 3000), rng.uniform(-n * cell, n * cell, 3000),
+                         rng.uniform(-math.pi, math.pi, 3000), strict=True):
+        state.setX(x)
+        state.setY(y)
+        state.setYaw(yaw)
+        i, j = math.floor(x / cell + n), math.floor(y / cell + n)
+        k = min(math.floor((yaw + math.pi) / (2 * math.pi) * n_yaw), n_yaw - 1)
+        gaps.append(space.distance(state, goal) - table[k, j, i])
+    assert min(gaps) >= -1e-9
+    assert np.mean(gaps) < 0.25
+
+
+def test_reverse_search_uses_reeds_shepp_and_stays_valid():
+    from tests.pathcheck import check_path
+
+    occ = np.zeros((160, 160), bool)
+    occ[:3] = occ[-3:] = True
+    occ[:, :3] = occ[:, -3:] = True
+    grid = OccupancyGrid.from_occupied(occ, 0.05)
+    planner = HybridAStar(grid, load_robot(), PlannerOptions(allow_reverse=True))
+    assert planner.rs_table.shape[0] == 72
+    start, goal = (4.0, 4.0, 0.0), (3.0, 4.0, 0.0)      # one metre straight behind: reversing is best
+    result = planner.plan(start, goal)
+    assert check_path(grid, planner.robot, result.states, start, goal) == []
+    assert (result.states[:, 4] < 0).any()              # it does reverse
+    assert result.length_m < 2.0
