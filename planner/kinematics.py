@@ -96,8 +96,3 @@ def wrap(a: float) -> float:
     """A scalar angle wrapped to (−π, π] (compiled: usable from the search loop and from Python)."""
     w = math.atan2(math.sin(a), math.cos(a))
     return math.pi if w == -math.pi else w
-
-
-def wrap_angle(a: float | np.ndarray) -> float | np.ndarray:
-    """Wrap to (−π, π]."""
-    return np.arctan2(np.sin(a), np.cos(a))

@@ -14,8 +14,9 @@ import numpy as np
 from hypothesis import settings
 from hypothesis import strategies as st
 
+from planner.kinematics import wrap
 from planner.occupancy import OccupancyGrid
-from planner.spherobot.rolling import GroundSegment, quat_angle, roll_polyline, tilt_from_quat, wrap_angle
+from planner.spherobot.rolling import GroundSegment, quat_angle, roll_polyline, tilt_from_quat
 
 # Shared hypothesis profiles of the rolling / reconfiguration tests: derandomized and bounded so the
 # suite stays fast and repeatable.
@@ -82,7 +83,7 @@ def check_result(result: dict[str, Any], goal: tuple[float, float], goal_heading
     assert math.hypot(rxy[-1, 0] - goal[0], rxy[-1, 1] - goal[1]) <= POSITION_TOL * R
     assert theta <= ANGLE_TOL
     if goal_heading is not None:
-        assert abs(wrap_angle(heading - goal_heading)) <= ANGLE_TOL
+        assert abs(wrap(heading - goal_heading)) <= ANGLE_TOL
     # the reported final state is the last sample
     f = result["final"]
     assert (f["x"], f["y"]) == (samples[-1]["x"], samples[-1]["y"])

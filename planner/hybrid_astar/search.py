@@ -45,7 +45,7 @@ from planner.errors import (
 )
 from planner.hybrid_astar import core
 from planner.hybrid_astar.heuristics import HolonomicHeuristic, auto_downsample, coarse_cost_grid, reeds_shepp_table
-from planner.kinematics import child_pose, densify_motions, wrap_angle
+from planner.kinematics import child_pose, densify_motions, wrap
 from planner.maps.clearance import CircleFootprint, ClearanceMap
 from planner.occupancy import OccupancyGrid
 from planner.result import PlanResult, build_states
@@ -254,8 +254,8 @@ class HybridAStar:
         o = self.options if time_limit_s is None else replace(self.options, time_limit_s=time_limit_s)
         o.validate()
         deadline = t0 + o.time_limit_s
-        start = (float(start[0]), float(start[1]), float(wrap_angle(float(start[2]))))
-        goal = (float(goal[0]), float(goal[1]), float(wrap_angle(float(goal[2]))))
+        start = (float(start[0]), float(start[1]), wrap(float(start[2])))
+        goal = (float(goal[0]), float(goal[1]), wrap(float(goal[2])))
         self._check_endpoint(start, "start")
         self._check_endpoint(goal, "goal")
         heur = self.holonomic(goal[:2], start[:2])

@@ -32,8 +32,9 @@ import numpy as np
 from scipy.optimize import brentq
 
 from planner.errors import InvalidInput
+from planner.kinematics import wrap
 from planner.spherobot.manoeuvre import Manoeuvre
-from planner.spherobot.rolling import GroundSegment, Quat, roll_segment, tilt_from_quat, wrap_angle
+from planner.spherobot.rolling import GroundSegment, Quat, roll_segment, tilt_from_quat
 
 TWO_PI = 2.0 * math.pi
 HALF_PI = 0.5 * math.pi
@@ -95,7 +96,7 @@ class ArcSolution:
 
     @property
     def alpha_final(self) -> float:
-        return wrap_angle(self.alpha_prime + self.delta_alpha)
+        return wrap(self.alpha_prime + self.delta_alpha)
 
     @property
     def delta_q(self) -> float:
@@ -142,7 +143,7 @@ def solve_partial_alpha(fx: float, fy: float, alpha_f: float) -> list[ArcSolutio
     theta_p = theta_for_offset(rho)
     cx, cy = -rho * ux, -rho * uy
     alpha_p = math.atan2(fy - cy, fx - cx)
-    direct = wrap_angle(alpha_f - alpha_p)
+    direct = wrap(alpha_f - alpha_p)
     comp = direct - math.copysign(TWO_PI, direct)
     return [
         ArcSolution(theta_p, alpha_p, direct, "direct"),
@@ -234,10 +235,10 @@ def arc_segments(sol: ArcSolution, fx: float, fy: float, radius_m: float) -> lis
     rho = R * math.tan(tp)
     sign = 1.0 if sol.delta_alpha > 0 else -1.0
     step3 = GroundSegment(
-        qx, qy, wrap_angle(ap + sign * HALF_PI), rho * abs(sol.delta_alpha), sign / rho, "b"
+        qx, qy, wrap(ap + sign * HALF_PI), rho * abs(sol.delta_alpha), sign / rho, "b"
     )
     ex, ey = step3.end
-    step4 = GroundSegment(ex, ey, wrap_angle(sol.alpha_final + math.pi), R * tp, 0.0, "a")
+    step4 = GroundSegment(ex, ey, wrap(sol.alpha_final + math.pi), R * tp, 0.0, "a")
     return [step2, step3, step4]
 
 
@@ -261,7 +262,7 @@ def arc_candidates(
     preludes: list[tuple[str, list[GroundSegment]]] = []
     if theta0 > 0.0:
         preludes.append(
-            ("step 1 backwards", [GroundSegment(sx, sy, wrap_angle(alpha0 + math.pi), R * theta0, 0.0, "a")])
+            ("step 1 backwards", [GroundSegment(sx, sy, wrap(alpha0 + math.pi), R * theta0, 0.0, "a")])
         )
         preludes.append(("step 1 forwards", [GroundSegment(sx, sy, alpha0, R * (TWO_PI - theta0), 0.0, "a")]))
     else:
@@ -272,7 +273,7 @@ def arc_candidates(
         away = math.atan2(fy0 - gy, fx0 - gx) if r0 > 0 else 0.0
         extra = R * (theta0 + TWO_PI)
         if theta0 > 0.0:
-            dist_dir = wrap_angle(alpha0 + math.pi)
+            dist_dir = wrap(alpha0 + math.pi)
             preludes.append(
                 (
                     "step 1 backwards with one extra revolution",
@@ -297,7 +298,7 @@ def arc_candidates(
             )
             continue
         if goal_heading is not None:
-            need = wrap_angle(goal_heading - tilt_from_quat(q)[2])
+            need = wrap(goal_heading - tilt_from_quat(q)[2])
             sols = solve_complete(ux, uy, need)
         elif alpha_final is not None:
             sols = solve_partial_alpha(ux, uy, alpha_final)

@@ -29,6 +29,7 @@ from planner.errors import (
     StartOccupied,
     StartOutsideMap,
 )
+from planner.kinematics import wrap
 from planner.maps.clearance import ClearanceMap
 from planner.occupancy import OccupancyGrid
 from planner.robot import load_robot
@@ -43,7 +44,6 @@ from planner.spherobot.rolling import (
     quat_rotate,
     sample_segment,
     tilt_from_quat,
-    wrap_angle,
 )
 from planner.spherobot.triangle import triangle_candidates
 
@@ -239,7 +239,7 @@ def goal_errors(
 ) -> tuple[float, float, float | None]:
     """(position error m, P's angle from the top rad, heading error rad or None) of a final state."""
     theta, _, spin = tilt_from_quat(q)
-    head_err = None if goal_heading is None else abs(wrap_angle(spin - goal_heading))
+    head_err = None if goal_heading is None else abs(wrap(spin - goal_heading))
     return math.hypot(xy[0] - goal[0], xy[1] - goal[1]), theta, head_err
 
 

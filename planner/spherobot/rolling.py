@@ -25,6 +25,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from planner.kinematics import wrap
+
 Quat = tuple[float, float, float, float]
 
 IDENTITY: Quat = (1.0, 0.0, 0.0, 0.0)
@@ -147,18 +149,12 @@ def tilt_from_quat(q: Quat) -> tuple[float, float, float]:
     alpha = math.atan2(py, px) if horiz > 1e-15 else 0.0
     rest = quat_mul(quat_conj(quat_axis_angle((-math.sin(alpha), math.cos(alpha), 0.0), theta)), q)
     spin = 2.0 * math.atan2(rest[3], rest[0])
-    return theta, alpha, wrap_angle(spin)
+    return theta, alpha, wrap(spin)
 
 
 def heading_of(q: Quat) -> float:
     """Heading (rad, (−π, π]): azimuth of body +x after rolling P straight to the top (the spin)."""
     return tilt_from_quat(q)[2]
-
-
-def wrap_angle(a: float) -> float:
-    """Angle wrapped to (−π, π]."""
-    w = math.remainder(a, 2.0 * math.pi)
-    return math.pi if w == -math.pi else w
 
 
 @dataclass(frozen=True)

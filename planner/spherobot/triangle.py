@@ -28,8 +28,9 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import brentq
 
+from planner.kinematics import wrap
 from planner.spherobot.manoeuvre import Manoeuvre
-from planner.spherobot.rolling import GroundSegment, Quat, roll_segment, tilt_from_quat, wrap_angle
+from planner.spherobot.rolling import GroundSegment, Quat, roll_segment, tilt_from_quat
 
 TWO_PI = 2.0 * math.pi
 HALF_PI = 0.5 * math.pi
@@ -161,7 +162,7 @@ def solve_triangles(dx: float, dy: float, yaw: float | None) -> list[tuple[str, 
         out.sort(key=lambda item: item[0])
         return [(name, legs) for _, name, legs in out]
 
-    target = wrap_angle(yaw)
+    target = wrap(yaw)
     for h1 in (1, -1):
         for h2 in (1, -1):
             for k in (-1, 0, 1):
@@ -212,7 +213,7 @@ def triangle_segments(
     for i, leg in enumerate(legs):
         tri = leg.triangle
         for side, rel in zip((tri.a, tri.b, tri.c), tri.leg_headings(leg.hand), strict=True):
-            seg = GroundSegment(x, y, wrap_angle(leg.heading_rad + rel), side * radius_m, 0.0, "roll")
+            seg = GroundSegment(x, y, wrap(leg.heading_rad + rel), side * radius_m, 0.0, "roll")
             segs.append(seg)
             steps.append(f"{label} {i + 1}")
             x, y = seg.end
@@ -245,7 +246,7 @@ def triangle_candidates(
         q = roll_segment(q, segs[-1], R)
     theta_o, alpha_o, _ = tilt_from_quat(q)
     if theta_o > 0:
-        segs.append(GroundSegment(gx, gy, wrap_angle(alpha_o + math.pi), theta_o * R, 0.0, "a"))
+        segs.append(GroundSegment(gx, gy, wrap(alpha_o + math.pi), theta_o * R, 0.0, "a"))
         steps.append("roll P to the top")
     preludes.append(("paper §3.2: goal first", segs, steps))
     # Alternative: roll P to the top straight away, then triangles over the whole distance.
@@ -253,7 +254,7 @@ def triangle_candidates(
     segs2: list[GroundSegment] = []
     steps2: list[str] = []
     if theta0 > 0:
-        segs2.append(GroundSegment(sx, sy, wrap_angle(alpha0 + math.pi), theta0 * R, 0.0, "a"))
+        segs2.append(GroundSegment(sx, sy, wrap(alpha0 + math.pi), theta0 * R, 0.0, "a"))
         steps2.append("roll P to the top")
     preludes.append(("P to the top first", segs2, steps2))
 
@@ -266,7 +267,7 @@ def triangle_candidates(
         px, py = (gx - x) / R, (gy - y) / R
         if math.hypot(px, py) > 2 * MAX_FAMILY_DISTANCE * 0.999:
             continue
-        yaw = None if goal_heading is None else wrap_angle(goal_heading - tilt_from_quat(qs)[2])
+        yaw = None if goal_heading is None else wrap(goal_heading - tilt_from_quat(qs)[2])
         for tname, legs in solve_triangles(px, py, yaw):
             steps_all = list(psteps)
             tsegs = triangle_segments(legs, x, y, R, steps_all, "triangle")
@@ -282,7 +283,7 @@ def triangle_candidates(
                         "excess_rad": leg.triangle.excess,
                         "hand": "right" if leg.hand == 1 else "left",
                         "yaw_rad": leg.triangle.yaw(leg.hand),
-                        "first_leg_heading_rad": wrap_angle(leg.heading_rad),
+                        "first_leg_heading_rad": wrap(leg.heading_rad),
                     }
                     for leg in legs
                 ],

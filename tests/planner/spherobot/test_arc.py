@@ -10,6 +10,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from planner.errors import InvalidInput
+from planner.kinematics import wrap
 from planner.spherobot.arc import (
     arc_candidates,
     arc_segments,
@@ -20,7 +21,7 @@ from planner.spherobot.arc import (
     theta_for_offset,
 )
 from planner.spherobot.reconfigure import ReconfigureRequest, plan_reconfiguration
-from planner.spherobot.rolling import GroundSegment, quat_from_tilt, quat_z, roll_polyline, tilt_from_quat, wrap_angle
+from planner.spherobot.rolling import GroundSegment, quat_from_tilt, quat_z, roll_polyline, tilt_from_quat
 from tests.reconfigcheck import FAST, PLANS, angle, check_result, segments_from_json
 
 coord = st.floats(-8.0, 8.0)
@@ -93,7 +94,7 @@ def test_eq_20_heading_change_against_rolling(alpha_p, theta_p, delta_alpha, psi
     q = tuple(roll_polyline(quat_z(psi0), np.concatenate(pts), R)[-1])
     theta, _, heading = tilt_from_quat(q)
     assert theta < 1e-4
-    assert abs(wrap_angle(heading - psi0 - sol.delta_q)) < 1e-3
+    assert abs(wrap(heading - psi0 - sol.delta_q)) < 1e-3
     # eq. 21: the chord F→O of the circle about C'
     end = segs[-1].end
     assert math.isclose(
@@ -151,9 +152,9 @@ def test_partial_with_alpha_final_ends_rolling_along_alpha_final(R, sx, sy, th, 
     if res["circle"] is None:  # F already at the goal: step 1 alone, no final roll to orient
         assert res["theta_prime_rad"] is None and len(res["segments"]) <= 1
         return
-    assert abs(wrap_angle(res["alpha_final_rad"] - alpha_f)) < 1e-9
+    assert abs(wrap(res["alpha_final_rad"] - alpha_f)) < 1e-9
     last = res["segments"][-1]
-    assert abs(wrap_angle(last["heading_rad"] - alpha_f - math.pi)) < 1e-9
+    assert abs(wrap(last["heading_rad"] - alpha_f - math.pi)) < 1e-9
 
 
 def test_direct_and_complementary_circles_are_both_offered():
@@ -169,7 +170,7 @@ def test_direct_and_complementary_circles_are_both_offered():
 
 def test_complete_solutions_cover_every_branch_kind():
     sols = solve_complete(3.0, 1.0, 0.4)
-    assert sols and all(abs(wrap_angle(s.delta_q - 0.4)) < 1e-9 for s in sols)
+    assert sols and all(abs(wrap(s.delta_q - 0.4)) < 1e-9 for s in sols)
     assert sols == sorted(sols, key=lambda s: s.length)
 
 

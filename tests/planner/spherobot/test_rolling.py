@@ -8,6 +8,7 @@ import numpy as np
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from planner.kinematics import wrap
 from planner.spherobot.rolling import (
     IDENTITY,
     GroundSegment,
@@ -28,7 +29,6 @@ from planner.spherobot.rolling import (
     sample_segment,
     spherobot_rates,
     tilt_from_quat,
-    wrap_angle,
 )
 from tests.reconfigcheck import FAST, angle
 
@@ -50,7 +50,7 @@ def test_tilt_puts_p_where_the_paper_says_and_round_trips(th, al, spin):
     t2, a2, s2 = tilt_from_quat(q)
     if 1e-6 < th < math.pi - 1e-6:
         assert math.isclose(t2, th, abs_tol=1e-9)
-        assert abs(wrap_angle(a2 - al)) < 1e-9
+        assert abs(wrap(a2 - al)) < 1e-9
         assert quat_angle(quat_from_tilt(t2, a2, s2), q) < 1e-9
 
 
@@ -64,7 +64,7 @@ def test_straight_roll_by_theta_along_alpha_is_the_tilt_and_keeps_the_heading(th
     rev = GroundSegment(0.0, 0.0, psi, 2 * math.pi * R)
     assert quat_angle(roll_segment(quat_from_tilt(th, al, spin), rev, R), quat_from_tilt(th, al, spin)) < 1e-9
     if th < math.pi - 1e-6:
-        assert abs(wrap_angle(heading_of(quat_from_tilt(th, al, spin)) - spin)) < 1e-9
+        assert abs(wrap(heading_of(quat_from_tilt(th, al, spin)) - spin)) < 1e-9
 
 
 @SLOW
@@ -134,7 +134,7 @@ def test_spherobot_model_eq_1_to_4_matches_so3_rolling(th, al, spin, R, wxp, wyp
         xy += np.cross(w_mid, [0.0, 0.0, R])[:2] * dt
     t2, a2, _ = tilt_from_quat(q)
     assert math.isclose(state.theta, t2, abs_tol=1e-5)
-    assert abs(wrap_angle(state.alpha - a2)) < 1e-5
+    assert abs(wrap(state.alpha - a2)) < 1e-5
     assert np.allclose([state.x, state.y], xy, atol=1e-5 * R)
 
 
@@ -152,7 +152,7 @@ def test_action_b_circle_of_radius_R_tan_theta_keeps_theta(th, al, spin, R, leng
     for si, q in zip(s, sample_segment(q0, seg, R, s), strict=True):
         t2, a2, _ = tilt_from_quat(tuple(q))
         assert math.isclose(t2, th, abs_tol=1e-9)
-        assert abs(wrap_angle(a2 - (al + sign * si / rho))) < 1e-9
+        assert abs(wrap(a2 - (al + sign * si / rho))) < 1e-9
 
 
 def test_polyline_corner_is_a_pure_turn():

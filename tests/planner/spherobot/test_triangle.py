@@ -9,8 +9,9 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
+from planner.kinematics import wrap
 from planner.spherobot.reconfigure import ReconfigureRequest, plan_reconfiguration
-from planner.spherobot.rolling import IDENTITY, GroundSegment, roll_polyline, roll_segments, tilt_from_quat, wrap_angle
+from planner.spherobot.rolling import IDENTITY, GroundSegment, roll_polyline, roll_segments, tilt_from_quat
 from planner.spherobot.triangle import (
     MAX_FAMILY_DISTANCE,
     right_isosceles,
@@ -43,7 +44,7 @@ def test_corrected_displacement_and_excess_against_rolling(a, b, C, hand, R):
     theta, _, yaw = tilt_from_quat(q)
     assert theta < 1e-9  # the contact point came back: P is on top again
     # eq. 9 / 10: yaw = −E (left-handed) or +E (right-handed)
-    assert abs(wrap_angle(yaw - hand * tri.excess)) < 1e-9
+    assert abs(wrap(yaw - hand * tri.excess)) < 1e-9
     # corrected eq. 5 and eq. 6 (printed for the left-handed path; mirrored for right-handed)
     d2 = (
         tri.a**2
@@ -60,7 +61,7 @@ def test_corrected_displacement_and_excess_against_rolling(a, b, C, hand, R):
         tri.a - tri.b * math.cos(tri.C) + tri.c * math.cos(tri.A + tri.C),
     )
     if math.hypot(dx, dy) > 1e-6:
-        assert abs(wrap_angle(math.atan2(dy, dx) - (-hand) * phi6)) < 1e-6
+        assert abs(wrap(math.atan2(dy, dx) - (-hand) * phi6)) < 1e-6
 
 
 def test_printed_eq_5_is_not_the_rolled_displacement():
@@ -99,12 +100,12 @@ def test_at_most_two_triangles_reach_every_displacement_and_yaw(d, yaw):
         theta, _, spin = tilt_from_quat(q)
         assert math.hypot(x - d * math.cos(0.7), y - d * math.sin(0.7)) < 1e-9
         assert theta < 1e-9
-        assert abs(wrap_angle(spin - yaw)) < 1e-9
+        assert abs(wrap(spin - yaw)) < 1e-9
 
 
 def test_sum_of_the_two_excesses_is_the_yaw():
     _, legs = solve_triangles(1.0, 0.5, 2.0)[0]
-    assert abs(wrap_angle(sum(leg.triangle.yaw(leg.hand) for leg in legs) - 2.0)) < 1e-12
+    assert abs(wrap(sum(leg.triangle.yaw(leg.hand) for leg in legs) - 2.0)) < 1e-12
 
 
 def _request(complete: bool, R, sx, sy, gx, gy, th, al, spin, head) -> ReconfigureRequest:
