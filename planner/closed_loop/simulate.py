@@ -261,7 +261,7 @@ def bench_mpc(
 ) -> list[dict[str, Any]]:
     """Time the MPC step in closed loop on an S-curve (noise-free): one row per (horizon, QP solver) with
     solve-time percentiles in ms. ``steps`` control periods per row. Prints nothing; see the CLI."""
-    from planner.closed_loop.synthetic_paths import s_curve_plan
+    from planner.synthetic_paths import s_curve_plan
 
     rob = load_robot(robot)
     plan = s_curve_plan(rob)

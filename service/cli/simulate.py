@@ -98,10 +98,10 @@ def run(args: argparse.Namespace) -> int:
     if args.bench:
         return _bench()
     from planner.closed_loop.simulate import SimulationOptions, simulate_plan
-    from planner.closed_loop.synthetic_paths import track_plan
     from planner.closed_loop.tracker import MPCParams
     from planner.occupancy import OccupancyGrid
     from planner.robot import RobotProfile, load_robot
+    from planner.synthetic_paths import track_plan
 
     if not args.path and not args.track:
         raise InvalidInput("path", "give --path PLAN.json or --track")

@@ -8,10 +8,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from planner.closed_loop.synthetic_paths import s_curve_plan
 from planner.maps.nav2 import save_map
 from planner.occupancy import OccupancyGrid
 from planner.robot import load_robot
+from planner.synthetic_paths import s_curve_plan
 from service.cli import main
 from tests.contracts import SIM_METRIC_KEYS
 

@@ -9,8 +9,8 @@ from pathlib import Path
 import pytest
 
 from planner.robot import load_robot
+from planner.synthetic_paths import circle_plan
 from planner.vpip.api import rods_report
-from planner.vpip.samples import circle_plan
 from service.cli import main
 
 

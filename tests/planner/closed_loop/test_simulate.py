@@ -6,9 +6,9 @@ import numpy as np
 
 from planner.closed_loop.simulate import SimulationOptions, bench_mpc, simulate_plan
 from planner.closed_loop.simulator import Disturbances
-from planner.closed_loop.synthetic_paths import s_curve_plan, track_plan
 from planner.occupancy import OccupancyGrid
 from planner.robot import load_robot
+from planner.synthetic_paths import s_curve_plan, track_plan
 from tests.contracts import SIM_METRIC_KEYS
 
 ROBOT = load_robot("zju-60")

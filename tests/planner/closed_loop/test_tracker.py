@@ -8,11 +8,11 @@ import numpy as np
 import pytest
 
 from planner.closed_loop.simulate import SimulationOptions, simulate_plan
-from planner.closed_loop.synthetic_paths import arc_plan, s_curve_plan, straight_plan
 from planner.closed_loop.tracker import MPCParams, ReferencePath
 from planner.errors import InvalidInput
 from planner.occupancy import OccupancyGrid
 from planner.robot import load_robot
+from planner.synthetic_paths import arc_plan, s_curve_plan, straight_plan
 
 ROBOT = load_robot("zju-60")
 FIELD = OccupancyGrid.from_occupied(np.zeros((160, 200), dtype=bool), 0.05, (-2.0, -3.0, 0.0))

@@ -9,9 +9,9 @@ import pytest
 
 from planner.errors import InvalidInput
 from planner.robot import load_robot
+from planner.synthetic_paths import circle_plan, plan_from_curvatures, straight_plan
 from planner.vpip.api import calibrate_report, radius_report, roll_report
 from planner.vpip.cascade import PathReference, run_schedule
-from planner.vpip.samples import circle_plan, plan_from_segments, s_curve_plan, straight_plan
 
 DAEDALUS = load_robot("daedalus")
 
@@ -48,7 +48,11 @@ def test_calibrate_refits_the_paper_runs() -> None:
 
 @pytest.mark.parametrize(
     "plan",
-    [straight_plan(DAEDALUS, 1.5), circle_plan(DAEDALUS, 1.2, 0.35), s_curve_plan(DAEDALUS, 1.0)],
+    [
+        straight_plan(DAEDALUS, 1.5),
+        circle_plan(DAEDALUS, 1.2, 0.35),
+        plan_from_curvatures(DAEDALUS, [(0.5, 0.0), (math.pi / 2, 1.0), (math.pi / 2, -1.0), (0.5, 0.0)]),  # S-curve
+    ],
     ids=["straight", "circle", "s-curve"],
 )
 @pytest.mark.parametrize("driver", ["vpip", "simple"])
@@ -84,7 +88,7 @@ def test_bad_plans_name_the_field() -> None:
     plan["states"][3]["x"] = "a"
     with pytest.raises(InvalidInput, match=r"states\[3\].x"):
         PathReference.from_plan(plan, DAEDALUS)
-    rev = plan_from_segments(DAEDALUS, [(0.5, 0.0)])
+    rev = plan_from_curvatures(DAEDALUS, [(0.5, 0.0)])
     rev["states"][2]["v"] = -0.1
     with pytest.raises(InvalidInput, match="v"):
         PathReference.from_plan(rev, DAEDALUS)

@@ -1,4 +1,11 @@
-"""Reference paths built by rolling eq. 1 of paper 001 through a roll schedule, in the plan-result format.
+"""Synthetic plans in the plan-result format, for tests, demos and the simulators of every wing.
+
+Two ways to build one. :func:`plan_from_rolls` rolls eq. 1 of paper 001 through a roll schedule (every
+path exactly rollable, roll ramped at a finite rate); :func:`plan_from_curvatures` chains exact arcs and
+straights of given curvature (the curvature steps at segment ends, as a path cut from a geometric
+planner would), with each state's roll from the profile's roll model.
+
+Reference paths built by rolling eq. 1 of paper 001 through a roll schedule:
 
 They stand in for planner output in tests and demos: a straight line, an arc at the minimum turning
 radius, an S-curve, and the 16.2 m × 8.4 m rectangular track of paper 001's positioning run (§6,
@@ -101,6 +108,45 @@ def plan_from_rolls(
     rate = 0.5 * robot.max_roll_rate_rad_s if ramp_rate is None else ramp_rate
     rows = _roll_path(robot, segments, start, v, rate)
     return _as_plan(robot, rows, v, spacing_m, name)
+
+
+def plan_from_curvatures(
+    robot: RobotProfile,
+    segments: Sequence[tuple[float, float]],
+    speed_m_s: float | None = None,
+    spacing_m: float = 0.025,
+) -> dict[str, Any]:
+    """A plan of ``segments`` [(length m, curvature 1/m), ...] from the origin heading +x: exact arcs and
+    straights, constant speed, each state's roll the profile's roll for its curvature."""
+    v = robot.max_speed_m_s if speed_m_s is None else speed_m_s
+    states: list[dict[str, float]] = []
+    x = y = yaw = s = 0.0
+
+    def add(k: float) -> None:
+        roll = float(robot.roll_model.roll_for_curvature(k))
+        states.append({"x": x, "y": y, "yaw": yaw, "roll": roll, "v": v, "t": s / v, "s": s, "curvature": k})
+
+    add(segments[0][1])
+    for length, k in segments:
+        n = max(1, math.ceil(length / spacing_m))
+        ds = length / n
+        for _ in range(n):
+            if abs(k) < 1e-12:
+                x += ds * math.cos(yaw)
+                y += ds * math.sin(yaw)
+            else:
+                x += (math.sin(yaw + k * ds) - math.sin(yaw)) / k
+                y += (math.cos(yaw) - math.cos(yaw + k * ds)) / k
+                yaw += k * ds
+            s += ds
+            add(k)
+    return {"status": "exact", "error_code": 0, "error_msg": "", "name": "curvatures", "length_m": s,
+            "robot": robot.to_json(), "states": states}
+
+
+def circle_plan(robot: RobotProfile, radius_m: float = 1.2, turns: float = 1.0) -> dict[str, Any]:
+    """A 0.5 m straight run-in, then ``turns`` left circles of ``radius_m`` (curvature steps, no roll ramp)."""
+    return plan_from_curvatures(robot, [(0.5, 0.0), (2 * math.pi * radius_m * turns, 1.0 / radius_m)])
 
 
 def straight_plan(

@@ -9,9 +9,17 @@ import numpy as np
 import pytest
 
 from planner.closed_loop.localization import OdometryIncrement, odometry_step
-from planner.closed_loop.synthetic_paths import arc_plan, plan_from_rolls, s_curve_plan, straight_plan, track_plan
 from planner.errors import InvalidInput
 from planner.robot import load_robot
+from planner.synthetic_paths import (
+    arc_plan,
+    circle_plan,
+    plan_from_curvatures,
+    plan_from_rolls,
+    s_curve_plan,
+    straight_plan,
+    track_plan,
+)
 
 ROBOT = load_robot("zju-60")
 
@@ -56,3 +64,19 @@ def test_consecutive_states_obey_eq1() -> None:
         )
         worst = max(worst, math.hypot(pose[0] - b["x"], pose[1] - b["y"]), abs(pose[2] - b["yaw"]))
     assert worst < 5e-4  # a wrong roll-shift sign or factor would give millimetres
+
+
+def test_curvature_plans_are_exact_arcs() -> None:
+    robot = load_robot("daedalus")
+    plan = plan_from_curvatures(robot, [(0.5, 0.0), (2 * math.pi * 1.2, 1 / 1.2)], spacing_m=0.02)
+    st = plan["states"]
+    xy = np.array([[s["x"], s["y"]] for s in st])
+    assert np.hypot(*np.diff(xy, axis=0).T).max() <= 0.02 + 1e-12
+    # the full circle after the run-in ends where it began, heading +x again (one turn later)
+    assert math.hypot(st[-1]["x"] - 0.5, st[-1]["y"]) < 1e-9
+    assert st[-1]["yaw"] == pytest.approx(2 * math.pi)
+    # every circle state lies 1.2 m from the centre (0.5, 1.2), with the roll of that curvature
+    circle = [s for s in st if s["s"] > 0.5 + 1e-9]
+    assert all(abs(math.hypot(s["x"] - 0.5, s["y"] - 1.2) - 1.2) < 1e-9 for s in circle)
+    assert all(s["roll"] == pytest.approx(float(robot.roll_model.roll_for_curvature(1 / 1.2))) for s in circle)
+    assert circle_plan(robot, 1.2, 1.0)["length_m"] == pytest.approx(0.5 + 2 * math.pi * 1.2)
