@@ -9,11 +9,15 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import Any
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from planner.errors import MapError
+
+if TYPE_CHECKING:
+    from planner.maps.mesh_world import MeshWorld
 
 OCCUPIED = 100
 FREE = 0
@@ -32,6 +36,10 @@ class OccupancyGrid:
     occupied_threshold : a cell with ``data >= occupied_threshold`` blocks the robot (percent).
     name : label used in results and plots.
     source : free-form metadata from the file it came from (YAML fields), kept for round-trips.
+    mesh_path : the mesh world this grid was sliced from (absolute), if any: plans on it are re-checked
+        exactly against that mesh.
+    mesh_world : the loaded mesh world itself when the grid was sliced in this process (saves reading the
+        mesh again for the re-check); None when only ``mesh_path`` is known.
     """
 
     data: np.ndarray
@@ -40,6 +48,8 @@ class OccupancyGrid:
     occupied_threshold: int = 65
     name: str = "map"
     source: dict[str, Any] = field(default_factory=dict)
+    mesh_path: Path | None = None
+    mesh_world: MeshWorld | None = field(default=None, repr=False)
 
     def __post_init__(self) -> None:
         if not (math.isfinite(self.resolution_m) and self.resolution_m > 0):

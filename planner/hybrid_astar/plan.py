@@ -16,7 +16,6 @@ from typing import TYPE_CHECKING
 
 from planner.errors import NoValidPathFound
 from planner.hybrid_astar.search import HybridAStar, PlannerOptions, Pose
-from planner.maps.load import mesh_path_of
 from planner.occupancy import OccupancyGrid
 from planner.result import PlanResult
 from planner.robot import RobotProfile
@@ -51,10 +50,10 @@ def _mesh_world(path: str) -> MeshWorld:
 
 def mesh_recheck(grid: OccupancyGrid, robot: RobotProfile, result: PlanResult) -> dict[str, object] | None:
     """Exact fcl check of a plan on a mesh world; None when the grid did not come from a mesh."""
-    mesh = mesh_path_of(grid)
-    if mesh is None:
+    if grid.mesh_path is None:
         return None
-    world = _mesh_world(str(mesh))
+    mesh = grid.mesh_path
+    world = grid.mesh_world if grid.mesh_world is not None else _mesh_world(str(mesh))
     states = result.states
     collides, index, min_distance = world.path_collides(states[:, 0], states[:, 1], states[:, 2], robot,
                                                         distance_every=10)

@@ -17,8 +17,8 @@ def load_any(path: str | Path, robot: RobotProfile | None = None, resolution_m: 
     """Load a map by extension: ``.yaml/.yml`` → :func:`load_map`; ``.stl/.obj/.ply`` → a sliced mesh world.
 
     For meshes the robot (default ``zju-60``) sets the height band that is sliced and ``resolution_m``
-    the cell size; ``grid.source["mesh"]`` holds the mesh path so that paths can be re-checked exactly
-    with :class:`planner.maps.mesh_world.MeshWorld`.
+    the cell size; the grid carries the loaded :class:`planner.maps.mesh_world.MeshWorld` so that paths are
+    re-checked exactly against it without reading the mesh again.
     """
     p = Path(path)
     suffix = p.suffix.lower()
@@ -29,14 +29,3 @@ def load_any(path: str | Path, robot: RobotProfile | None = None, resolution_m: 
 
         return MeshWorld.from_file(p).to_grid(resolution_m, robot)
     raise MapError("map", f"{p.name}: unknown map type {suffix!r} (use .yaml/.yml or .stl/.obj/.ply)")
-
-
-def mesh_path_of(grid: OccupancyGrid) -> Path | None:
-    """The mesh a grid was sliced from (``mesh`` key of its YAML, relative to the YAML), or None."""
-    mesh = grid.source.get("mesh")
-    if not mesh:
-        return None
-    mesh_path = Path(str(mesh))
-    if not mesh_path.is_absolute() and grid.source.get("yaml_path"):
-        mesh_path = Path(str(grid.source["yaml_path"])).parent / mesh_path
-    return mesh_path

@@ -166,7 +166,8 @@ class MeshWorld:
             source["mesh"] = mesh
         source.update({"floor_z": round(self.floor_z, 6), "clearance_m": clearance_m, "robot": robot.name})
         return OccupancyGrid(data=grid.data, resolution_m=grid.resolution_m, origin=grid.origin,
-                             name=self.name, source=source)
+                             name=self.name, source=source,
+                             mesh_path=self.path.resolve() if self.path else None, mesh_world=self)
 
     # ------------------------------------------------------------------------------------------ exact check
 

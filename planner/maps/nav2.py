@@ -233,6 +233,7 @@ def load_map(path: str | Path) -> OccupancyGrid:
     source = dict(doc)
     source["mode"] = params["mode"]
     source["yaml_path"] = str(yaml_path)
+    mesh = doc.get("mesh")
     return OccupancyGrid(
         data=np.ascontiguousarray(top_down[::-1]),
         resolution_m=params["resolution"],
@@ -240,6 +241,7 @@ def load_map(path: str | Path) -> OccupancyGrid:
         occupied_threshold=_blocking_threshold(params["mode"], params["occupied_thresh"]),
         name=yaml_path.stem,
         source=source,
+        mesh_path=(yaml_path.parent / str(mesh)).resolve() if mesh else None,
     )
 
 

@@ -8,7 +8,6 @@ import numpy as np
 import pytest
 from scipy import ndimage
 
-from planner.maps.load import mesh_path_of
 from planner.maps.mesh_world import MeshWorld
 from planner.maps.nav2 import load_map
 from planner.maps.problems import list_problems, load_problem_set
@@ -43,8 +42,8 @@ def test_shipped_grid_sizes(name: str) -> None:
 def test_cave_grid_comes_from_its_mesh() -> None:
     grid = load_map(MAPS / "cave.yaml")
     assert grid.resolution_m == 0.1 and grid.source["robot"] == "zju-60"
-    mesh = mesh_path_of(grid)
-    assert mesh == MAPS / "cave.stl"
+    mesh = grid.mesh_path
+    assert mesh == (MAPS / "cave.stl").resolve()
     w, h = grid.size_m
     assert 50 <= w <= 65 and 35 <= h <= 45
     world = MeshWorld.from_file(mesh)

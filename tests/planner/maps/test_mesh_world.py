@@ -16,7 +16,7 @@ import pytest
 import trimesh
 
 from planner.errors import MapError
-from planner.maps.load import load_any, mesh_path_of
+from planner.maps.load import load_any
 from planner.maps.mesh_world import MeshWorld
 from planner.maps.nav2 import load_map, save_map
 from planner.robot import load_robot
@@ -123,12 +123,14 @@ def test_mesh_files_round_trip_through_load_any(tmp_path: Path, robot) -> None: 
     stl = tmp_path / "room.stl"
     stl.write_bytes(room_mesh().export(file_type="stl"))
     grid = load_any(stl, robot, resolution_m=0.1)
-    assert grid.name == "room" and mesh_path_of(grid) == stl
+    assert grid.name == "room" and grid.mesh_path == stl.resolve()
+    assert grid.mesh_world is not None and grid.mesh_world.path == stl  # the sliced world travels with the grid
     # floor_z defaults to the lowest vertex (the room's floor at z = 0).
     assert grid.source["floor_z"] == 0.0
     saved = save_map(grid, tmp_path / "room.yaml")
     again = load_any(saved)
-    assert np.array_equal(again.data, grid.data) and mesh_path_of(again) == stl
+    assert np.array_equal(again.data, grid.data) and again.mesh_path == stl.resolve()
+    assert again.mesh_world is None  # loaded lazily (and cached) by the exact re-check
 
 
 def test_mesh_errors(tmp_path: Path) -> None:
