@@ -2,7 +2,16 @@
 
 A profile is a TOML file (built-ins live in ``planner/robots/``; ``load_robot(path)`` reads a user's own).
 It gives the shell radius, roll and speed limits, the footprint used for collision checking, and the
-roll→curvature model that steers the sphere:
+roll→curvature model that steers the sphere.
+
+The footprint follows Nav2's ``footprint`` convention: a polygon ``[[x, y], ...]`` in the robot frame (x
+forward, y left, metres), grown by ``footprint_padding_m`` the way Nav2 pads it (each vertex moved outward
+by the padding in x and in y). Without a polygon the footprint is the ellipse of ``footprint_length_m`` ×
+``footprint_width_m`` (a sphere's shell with its flanges), as a 16-gon drawn around it. ``reversible`` says
+whether the robot rolls backwards as well as forwards (a sphere does); ``preferred_clearance_m`` is how
+much room the planner tries to leave between the footprint and obstacles where there is room.
+
+The roll→curvature models:
 
 * ``kinematic`` — paper 001 eq. 1: yaw rate = v·tan φ / r, i.e. curvature κ(φ) = tan φ / r.
 * ``calibrated`` — a table of measured (roll, turning radius) pairs (paper 000 §5: 5°, 10°, 15° →
@@ -31,6 +40,31 @@ from scipy.interpolate import PchipInterpolator
 from planner.errors import NotFound, RobotProfileError
 
 DEFAULT_ROBOT = "zju-60"
+ELLIPSE_VERTICES = 16  # the default footprint: this many vertices around the ellipse
+DEFAULT_PADDING_M = 0.01  # Nav2's footprint_padding default
+
+
+def ellipse_footprint(length_m: float, width_m: float, n: int = ELLIPSE_VERTICES) -> tuple[tuple[float, float], ...]:
+    """A convex n-gon containing the ellipse with axes ``length_m`` (x) × ``width_m`` (y), touching it at the
+    middle of every edge (vertices at the ellipse's parametric angles, scaled by 1 / cos(π / n))."""
+    scale = 1.0 / math.cos(math.pi / n)
+    return tuple(
+        (0.5 * length_m * scale * math.cos(2 * math.pi * (k + 0.5) / n),
+         0.5 * width_m * scale * math.sin(2 * math.pi * (k + 0.5) / n))
+        for k in range(n)
+    )
+
+
+def pad_footprint(points: np.ndarray, padding_m: float) -> np.ndarray:
+    """Nav2's ``padFootprint``: every vertex moved outward by ``padding_m`` in x and in y (by its signs)."""
+    return np.asarray(points, float) + np.sign(points) * padding_m
+
+
+def _segments_cross(a: np.ndarray, b: np.ndarray, c: np.ndarray, d: np.ndarray) -> bool:
+    def orient(p: np.ndarray, q: np.ndarray, r: np.ndarray) -> float:
+        return float((q[0] - p[0]) * (r[1] - p[1]) - (q[1] - p[1]) * (r[0] - p[0]))
+
+    return orient(a, b, c) * orient(a, b, d) < 0 and orient(c, d, a) * orient(c, d, b) < 0
 
 
 @dataclass(frozen=True)
@@ -125,6 +159,16 @@ class RobotProfile:
     roll_model: RollModel
     description: str = ""
     extra: Mapping[str, Any] = field(default_factory=dict)
+    footprint: tuple[tuple[float, float], ...] = ()
+    footprint_padding_m: float = DEFAULT_PADDING_M
+    reversible: bool = True
+    preferred_clearance_m: float = 0.0
+
+    @cached_property
+    def footprint_polygon(self) -> np.ndarray:
+        """The padded footprint polygon (n, 2) in the robot frame (x forward, y left), metres: what collides."""
+        base = self.footprint or ellipse_footprint(self.footprint_length_m, self.footprint_width_m)
+        return pad_footprint(np.array(base, float), self.footprint_padding_m)
 
     @property
     def max_curvature(self) -> float:
@@ -149,6 +193,10 @@ class RobotProfile:
             "max_speed_m_s": self.max_speed_m_s,
             "footprint_length_m": self.footprint_length_m,
             "footprint_width_m": self.footprint_width_m,
+            "footprint": [[round(float(x), 6), round(float(y), 6)] for x, y in self.footprint_polygon],
+            "footprint_padding_m": self.footprint_padding_m,
+            "reversible": self.reversible,
+            "preferred_clearance_m": self.preferred_clearance_m,
             "min_turning_radius_m": self.min_turning_radius_m,
             "roll_model": model,
         }
@@ -164,6 +212,39 @@ def _positive(data: Mapping[str, Any], key: str, where: str) -> float:
     if not math.isfinite(value) or value <= 0:
         raise RobotProfileError(f"{where}{key}", f"must be a finite number > 0, got {value!r}")
     return value
+
+
+def _non_negative(data: Mapping[str, Any], key: str, default: float) -> float:
+    value = data.get(key, default)
+    if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value) or value < 0:
+        raise RobotProfileError(key, f"must be a finite number ≥ 0, got {value!r}")
+    return float(value)
+
+
+def _polygon(value: Any) -> tuple[tuple[float, float], ...]:
+    """A footprint polygon from TOML: ≥ 3 finite [x, y] points, non-zero area, edges not crossing."""
+    if not isinstance(value, list) or len(value) < 3:
+        raise RobotProfileError("footprint", "must be a list of at least three [x, y] points (metres)")
+    pts: list[tuple[float, float]] = []
+    for i, pt in enumerate(value):
+        if (not isinstance(pt, list) or len(pt) != 2
+                or not all(isinstance(v, int | float) and not isinstance(v, bool) and math.isfinite(v) for v in pt)):
+            raise RobotProfileError(f"footprint[{i}]", f"must be two finite numbers [x, y], got {pt!r}")
+        pts.append((float(pt[0]), float(pt[1])))
+    arr = np.array(pts)
+    area = 0.5 * float(np.sum(arr[:, 0] * np.roll(arr[:, 1], -1) - np.roll(arr[:, 0], -1) * arr[:, 1]))
+    if abs(area) < 1e-6:
+        raise RobotProfileError("footprint", "encloses no area")
+    n = len(arr)
+    for i in range(n):
+        for j in range(i + 2, n):
+            if i == 0 and j == n - 1:
+                continue
+            if _segments_cross(arr[i], arr[(i + 1) % n], arr[j], arr[(j + 1) % n]):
+                raise RobotProfileError("footprint", f"edges {i} and {j} cross (the polygon must be simple)")
+    if not (arr.min(axis=0) < 0).all() or not (arr.max(axis=0) > 0).all():
+        raise RobotProfileError("footprint", "must surround the robot's centre (0, 0)")
+    return tuple(pts)
 
 
 def profile_from_dict(data: Mapping[str, Any], default_name: str = "custom") -> RobotProfile:
@@ -193,7 +274,19 @@ def profile_from_dict(data: Mapping[str, Any], default_name: str = "custom") -> 
     known = {
         "name", "description", "radius_m", "max_roll_deg", "max_roll_rate_deg_s", "roll_time_constant_s",
         "max_speed_m_s", "max_accel_m_s2", "footprint_length_m", "footprint_width_m", "roll_model",
+        "footprint", "footprint_padding_m", "reversible", "preferred_clearance_m",
     }
+    polygon = _polygon(data["footprint"]) if "footprint" in data else ()
+    if polygon:  # the extents follow the polygon (Nav2 gives only the polygon)
+        arr = np.array(polygon)
+        length = 2.0 * float(np.abs(arr[:, 0]).max())
+        width = 2.0 * float(np.abs(arr[:, 1]).max())
+    else:
+        length = _positive(data, "footprint_length_m", "")
+        width = _positive(data, "footprint_width_m", "")
+    reversible = data.get("reversible", True)
+    if not isinstance(reversible, bool):
+        raise RobotProfileError("reversible", f"must be true or false, got {reversible!r}")
     extra = {k: v for k, v in data.items() if k not in known}
     for key, value in extra.items():
         if not isinstance(value, Mapping):
@@ -206,11 +299,15 @@ def profile_from_dict(data: Mapping[str, Any], default_name: str = "custom") -> 
         roll_time_constant_s=_positive(data, "roll_time_constant_s", ""),
         max_speed_m_s=_positive(data, "max_speed_m_s", ""),
         max_accel_m_s2=_positive(data, "max_accel_m_s2", ""),
-        footprint_length_m=_positive(data, "footprint_length_m", ""),
-        footprint_width_m=_positive(data, "footprint_width_m", ""),
+        footprint_length_m=length,
+        footprint_width_m=width,
         roll_model=model,
         description=str(data.get("description", "")),
         extra=extra,
+        footprint=polygon,
+        footprint_padding_m=_non_negative(data, "footprint_padding_m", DEFAULT_PADDING_M),
+        reversible=reversible,
+        preferred_clearance_m=_non_negative(data, "preferred_clearance_m", 0.0),
     )
 
 

@@ -1,6 +1,7 @@
 """Robot profiles and the roll→curvature models."""
 
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -66,3 +67,51 @@ def test_calibrated_model_between_the_measured_runs():
         assert np.all((radii[inside] < r_lo) & (radii[inside] > r_hi))
     assert model.turning_radius(math.radians(0.5)) > 2 * model.turning_radius(math.radians(2.0))
     assert model.turning_radius(0.0) == math.inf
+
+
+def _inside(poly: np.ndarray, pts: np.ndarray) -> np.ndarray:
+    """Even-odd point-in-polygon, written here apart from the planner's own code."""
+    x, y = pts[:, 0:1], pts[:, 1:2]
+    x1, y1 = poly[:, 0], poly[:, 1]
+    x2, y2 = np.roll(x1, -1), np.roll(y1, -1)
+    crosses = ((y1 > y) != (y2 > y)) & (x < (x2 - x1) * (y - y1) / (y2 - y1 + 1e-300) + x1)
+    return crosses.sum(axis=1) % 2 == 1
+
+
+def test_default_footprint_is_a_padded_polygon_around_the_shell_ellipse() -> None:
+    robot = load_robot("zju-60")
+    poly = robot.footprint_polygon
+    t = np.linspace(0, 2 * np.pi, 720, endpoint=False)
+    ellipse = np.column_stack([0.3 * np.cos(t), 0.35 * np.sin(t)])
+    assert _inside(poly, 0.999 * ellipse).all()
+    # padded by 2 cm: the extents grow by the padding and no more than √2 of it
+    assert 0.3 + 0.02 <= np.abs(poly[:, 0]).max() <= 0.3 / np.cos(np.pi / 16) + 0.02 + 1e-9
+    assert robot.reversible and robot.preferred_clearance_m == 0.3
+    js = robot.to_json()
+    assert js["footprint_padding_m"] == 0.02 and len(js["footprint"]) == 16 and js["reversible"] is True
+
+
+def test_a_polygon_footprint_sets_the_extents_and_is_validated(tmp_path) -> None:
+    base = Path(__file__).resolve().parents[2] / "planner" / "robots" / "zju-60.toml"
+    text = base.read_text().replace("footprint_length_m = 0.60", "footprint = [[0.4, 0.25], [-0.4, 0.25], "
+                                    "[-0.4, -0.25], [0.4, -0.25]]").replace("footprint_width_m = 0.70", "")
+    ok = tmp_path / "box.toml"
+    ok.write_text(text)
+    robot = load_robot(ok)
+    assert robot.footprint_length_m == 0.8 and robot.footprint_width_m == 0.5
+    assert np.allclose(np.abs(robot.footprint_polygon), [0.42, 0.27])
+    for bad, field in [
+        ("[[0.4, 0.25], [-0.4, 0.25]]", "footprint"),
+        ("[[0.4, 0.25], [-0.4, -0.25], [-0.4, 0.25], [0.4, -0.25]]", "footprint"),  # a bow tie
+        ("[[1.0, 1.0], [2.0, 1.0], [2.0, 2.0]]", "footprint"),  # does not surround the centre
+        ("[[0.4, 0.25], [-0.4, 0.25], [\"a\", 0]]", "footprint[2]"),
+    ]:
+        p = tmp_path / "bad.toml"
+        p.write_text(text.replace("[[0.4, 0.25], [-0.4, 0.25], [-0.4, -0.25], [0.4, -0.25]]", bad))
+        with pytest.raises(RobotProfileError) as info:
+            load_robot(p)
+        assert info.value.field == field
+    p = tmp_path / "neg.toml"
+    p.write_text(text.replace("footprint_padding_m = 0.02", "footprint_padding_m = -0.1"))
+    with pytest.raises(RobotProfileError, match="footprint_padding_m"):
+        load_robot(p)
