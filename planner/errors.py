@@ -54,9 +54,11 @@ class PlanningError(SpherePlanError):
 
     code = 200
 
-    def __init__(self, msg: str) -> None:
+    def __init__(self, msg: str, *, planning_time_s: float = 0.0, expansions: int = 0) -> None:
         super().__init__(msg)
         self.msg = msg
+        self.planning_time_s = planning_time_s
+        self.expansions = expansions
 
 
 class StartOutsideMap(PlanningError):

@@ -110,7 +110,8 @@ class PlanResult:
 
 def failure_json(code: int, msg: str, robot: RobotProfile | None, planning_time_s: float = 0.0,
                  expansions: int = 0) -> dict[str, Any]:
-    """The result JSON of a failed plan (status ``failed``, the Nav2 code and a sentence)."""
+    """The result JSON of a failed plan (status ``failed``, the Nav2 code and a sentence, the time spent and
+    the expansions done before failing)."""
     return {
         "status": "failed",
         "error_code": code,

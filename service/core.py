@@ -148,7 +148,7 @@ def outcome_of_exception(exc: BaseException, robot_json: Any = None, plan: bool 
         if not plan:
             body = {"status": "failed", "error_code": exc.code, "error_msg": exc.msg, "field": None}
             return Outcome("failed", _dumps(body), exc.code)
-        body = failure_json(exc.code, exc.msg, None)
+        body = failure_json(exc.code, exc.msg, None, exc.planning_time_s, exc.expansions)
         body["robot"] = robot_json
         return Outcome("failed", _dumps(body), exc.code)
     if isinstance(exc, NotFound):

@@ -1,7 +1,8 @@
 """An independent checker for planned paths, written apart from the planner's own collision code.
 
-It rasterises the real footprint rectangle at every state on the *raw* grid (no distance transform, no
-covering circles) and checks the sphere's kinematic constraints between consecutive states.
+It tests the robot's padded footprint polygon at every state against the cell squares of the *raw* grid
+(matplotlib's path geometry; no distance transform, no covering circles) and checks the sphere's
+kinematic constraints between consecutive states.
 """
 
 from __future__ import annotations
@@ -9,35 +10,43 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from matplotlib.path import Path
+from matplotlib.transforms import Bbox
 
 from planner.occupancy import OccupancyGrid
 from planner.robot import RobotProfile
 
 
-def footprint_hits(grid: OccupancyGrid, robot: RobotProfile, x: float, y: float, yaw: float) -> bool:
-    """True when the footprint rectangle at (x, y, yaw) overlaps a blocked cell or leaves the map."""
-    res = grid.resolution_m
-    hl, hw = robot.footprint_length_m / 2, robot.footprint_width_m / 2
+def _world_polygon(robot: RobotProfile, x: float, y: float, yaw: float) -> np.ndarray:
     c, s = math.cos(yaw), math.sin(yaw)
-    corners = np.array([[x + c * a - s * b, y + s * a + c * b] for a in (-hl, hl) for b in (-hw, hw)])
-    lo = np.floor((corners.min(axis=0) - grid.origin[:2]) / res).astype(int)
-    hi = np.floor((corners.max(axis=0) - grid.origin[:2]) / res).astype(int)
-    if lo[0] < 0 or lo[1] < 0 or hi[0] >= grid.width or hi[1] >= grid.height:
+    body = robot.footprint_polygon
+    return np.column_stack([x + c * body[:, 0] - s * body[:, 1], y + s * body[:, 0] + c * body[:, 1]])
+
+
+def _cells_near(grid: OccupancyGrid, poly: np.ndarray, reach_m: float) -> np.ndarray:
+    """Lower-left corners (n, 2) of the blocked cells whose square lies within ``reach_m`` of the polygon's box."""
+    res = grid.resolution_m
+    lo = np.floor((poly.min(axis=0) - reach_m - grid.origin[:2]) / res).astype(int)
+    hi = np.floor((poly.max(axis=0) + reach_m - grid.origin[:2]) / res).astype(int)
+    lo = np.maximum(lo, 0)
+    hi = np.minimum(hi, [grid.width - 1, grid.height - 1])
+    iy, ix = np.nonzero(grid.blocked()[lo[1]:hi[1] + 1, lo[0]:hi[0] + 1])
+    return np.column_stack([grid.origin[0] + (ix + lo[0]) * res, grid.origin[1] + (iy + lo[1]) * res])
+
+
+def footprint_hits(grid: OccupancyGrid, robot: RobotProfile, x: float, y: float, yaw: float) -> bool:
+    """True when the padded footprint polygon at (x, y, yaw) overlaps a blocked cell or leaves the map
+    (matplotlib's path geometry: a cell square meets the polygon when either contains a point of the other
+    or their outlines cross)."""
+    poly = _world_polygon(robot, x, y, yaw)
+    w, h = grid.size_m
+    if (poly[:, 0].min() < grid.origin[0] or poly[:, 1].min() < grid.origin[1]
+            or poly[:, 0].max() >= grid.origin[0] + w or poly[:, 1].max() >= grid.origin[1] + h):
         return True
-    blocked = grid.blocked()
-    for iy in range(lo[1], hi[1] + 1):
-        for ix in range(lo[0], hi[0] + 1):
-            if not blocked[iy, ix]:
-                continue
-            # separating-axis test between the cell square and the footprint rectangle
-            cx = grid.origin[0] + (ix + 0.5) * res - x
-            cy = grid.origin[1] + (iy + 0.5) * res - y
-            along, across = c * cx + s * cy, -s * cx + c * cy
-            r_cell_along = res / 2 * (abs(c) + abs(s))
-            if abs(along) > hl + r_cell_along or abs(across) > hw + r_cell_along:
-                continue
-            if abs(cx) > res / 2 + hl * abs(c) + hw * abs(s) or abs(cy) > res / 2 + hl * abs(s) + hw * abs(c):
-                continue
+    res = grid.resolution_m
+    outline = Path(np.vstack([poly, poly[:1]]), closed=True)
+    for cx, cy in _cells_near(grid, poly, 0.0):
+        if outline.intersects_bbox(Bbox([[cx, cy], [cx + res, cy + res]]), filled=True):
             return True
     return False
 
@@ -91,36 +100,27 @@ def _point_segment(p: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
 
 
 def footprint_distance(grid: OccupancyGrid, robot: RobotProfile, states: np.ndarray, reach_m: float = 1.5) -> float:
-    """Smallest distance (m) from the footprint rectangle at any state to a blocked cell square or the map's
-    edge, by brute force over the cells within ``reach_m`` (vertex-to-edge distances of two convex polygons);
-    0 where they overlap. Capped at ``reach_m``."""
+    """Smallest distance (m) from the padded footprint polygon at any state to a blocked cell square or the
+    map's edge, by brute force over the cells within ``reach_m`` (vertex-to-edge distances of the two
+    polygons); 0 where they overlap. Capped at ``reach_m``."""
     res = grid.resolution_m
-    hl, hw = robot.footprint_length_m / 2, robot.footprint_width_m / 2
-    blocked = grid.blocked()
     sq = np.array([[0, 0], [1, 0], [1, 1], [0, 1]], float) * res
     w, h = grid.size_m
     best = reach_m
     for x, y, yaw in states[:, :3]:
         if footprint_hits(grid, robot, x, y, yaw):
             return 0.0
-        c, s = math.cos(yaw), math.sin(yaw)
-        body = ((-hl, -hw), (hl, -hw), (hl, hw), (-hl, hw))
-        rect = np.array([[x + c * a - s * b, y + s * a + c * b] for a, b in body])
-        edge = min((rect[:, 0] - grid.origin[0]).min(), (grid.origin[0] + w - rect[:, 0]).min(),
-                   (rect[:, 1] - grid.origin[1]).min(), (grid.origin[1] + h - rect[:, 1]).min())
+        poly = _world_polygon(robot, x, y, yaw)
+        edge = min((poly[:, 0] - grid.origin[0]).min(), (grid.origin[0] + w - poly[:, 0]).min(),
+                   (poly[:, 1] - grid.origin[1]).min(), (grid.origin[1] + h - poly[:, 1]).min())
         best = min(best, edge)
-        r = math.hypot(hl, hw) + reach_m
-        ix0, iy0 = grid.world_to_cell(x - r, y - r)
-        ix1, iy1 = grid.world_to_cell(x + r, y + r)
-        ix0, iy0, ix1, iy1 = max(ix0, 0), max(iy0, 0), min(ix1, grid.width - 1), min(iy1, grid.height - 1)
-        iy, ix = np.nonzero(blocked[iy0:iy1 + 1, ix0:ix1 + 1])
-        if not len(ix):
+        corner = _cells_near(grid, poly, reach_m)
+        if not len(corner):
             continue
-        corner = np.column_stack([grid.origin[0] + (ix + ix0) * res, grid.origin[1] + (iy + iy0) * res])
         cells = corner[:, None, :] + sq[None]                      # (n, 4, 2)
-        r_a, r_b = rect, np.roll(rect, -1, axis=0)                  # rectangle edges
+        p_a, p_b = poly, np.roll(poly, -1, axis=0)                  # polygon edges
         c_a, c_b = cells, np.roll(cells, -1, axis=1)                # cell edges
-        d1 = _point_segment(cells[:, :, None, :], r_a[None, None], r_b[None, None]).min(axis=(1, 2))
-        d2 = _point_segment(rect[None, :, None, :], c_a[:, None], c_b[:, None]).min(axis=(1, 2))
+        d1 = _point_segment(cells[:, :, None, :], p_a[None, None], p_b[None, None]).min(axis=(1, 2))
+        d2 = _point_segment(poly[None, :, None, :], c_a[:, None], c_b[:, None]).min(axis=(1, 2))
         best = min(best, float(np.minimum(d1, d2).min()))
     return best

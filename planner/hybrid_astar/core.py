@@ -16,7 +16,7 @@ from numba import njit
 from planner.hybrid_astar.dubins import WORD_TURNS, dubins_distance, dubins_shortest
 from planner.hybrid_astar.heap import heap_pop, heap_push
 from planner.kinematics import arc_step, roll_shift, wrap
-from planner.maps.clearance import pose_margin_nb
+from planner.maps.clearance import pose_margin_exact
 
 RUNNING, FOUND, EXHAUSTED, FULL = 0, 1, 2, 3
 
@@ -25,24 +25,26 @@ C_NODES, C_EXPANSIONS, C_SINCE_SHOT, C_RESULT, C_SHOT_SEGS = 0, 1, 2, 3, 4
 # params[] slots (float64)
 (P_OX, P_OY, P_RES, P_RC, P_HOX, P_HOY, P_HCELL, P_RHO, P_GX, P_GY, P_GYAW, P_TOL_XY, P_TOL_YAW, P_RADIUS,
  P_STEP, P_SPACING, P_NON_STRAIGHT, P_CHANGE, P_REVERSE, P_SWITCH, P_COST_PENALTY, P_PROX_RANGE, P_GREED,
- P_SHOT_RATIO, P_MAX_ROLL, P_USE_DUBINS, P_ALLOW_REVERSE, P_N_YAW, P_USE_RS, P_RS_CELL, P_RS_HALF) = range(31)
-N_PARAMS = 31
+ P_SHOT_RATIO, P_MAX_ROLL, P_USE_DUBINS, P_ALLOW_REVERSE, P_N_YAW, P_USE_RS, P_RS_CELL, P_RS_HALF,
+ P_PREFERRED) = range(32)
+N_PARAMS = 32
 MAX_SHOT_SEGS = 3
 
 
 @njit(cache=True)
 def _motion_margin(
-    clear: np.ndarray, p: np.ndarray, offx: np.ndarray, offy: np.ndarray,
-    x: float, y: float, yaw: float, d_roll: float, curv: float, s: float, worst_so_far: float,
+    clear: np.ndarray, blocked: np.ndarray, p: np.ndarray, offx: np.ndarray, offy: np.ndarray, px: np.ndarray,
+    py: np.ndarray, x: float, y: float, yaw: float, d_roll: float, curv: float, s: float, worst_so_far: float,
 ) -> float:
-    """Smallest footprint margin (m) along a roll change then an arc, sampled ≤ p[P_SPACING] apart."""
+    """Smallest footprint margin (m) along a roll change then an arc, sampled ≤ p[P_SPACING] apart (the
+    covering circles' margin, or 0 where only the exact polygon fits; negative = collision)."""
     ox, oy, res, r_c, radius, spacing = p[P_OX], p[P_OY], p[P_RES], p[P_RC], p[P_RADIUS], p[P_SPACING]
     worst = worst_so_far
     shift = abs(radius * d_roll)
     n = int(math.ceil(shift / spacing))
     for i in range(1, n + 1):
         xs, ys = roll_shift(x, y, yaw, radius, d_roll * i / n)
-        m = pose_margin_nb(clear, ox, oy, res, xs, ys, yaw, offx, offy, r_c)
+        m = pose_margin_exact(clear, blocked, ox, oy, res, xs, ys, yaw, offx, offy, r_c, px, py)
         if m < worst:
             worst = m
             if worst < 0.0:
@@ -51,7 +53,7 @@ def _motion_margin(
     n = int(math.ceil(abs(s) / spacing))
     for i in range(1, n + 1):
         xa, ya, ya2 = arc_step(x1, y1, yaw, curv, s * i / n)
-        m = pose_margin_nb(clear, ox, oy, res, xa, ya, ya2, offx, offy, r_c)
+        m = pose_margin_exact(clear, blocked, ox, oy, res, xa, ya, ya2, offx, offy, r_c, px, py)
         if m < worst:
             worst = m
             if worst < 0.0:
@@ -102,16 +104,17 @@ def _closed_key(p: np.ndarray, w: int, x: float, y: float, yaw: float, rb: int, 
 
 @njit(cache=True)
 def try_shot(
-    clear: np.ndarray, p: np.ndarray, offx: np.ndarray, offy: np.ndarray,
+    clear: np.ndarray, blocked: np.ndarray, p: np.ndarray, offx: np.ndarray, offy: np.ndarray, px: np.ndarray,
+    py: np.ndarray,
     x: float, y: float, yaw: float, roll: float, gx: float, gy: float, gyaw: float, groll: float,
-    seg_roll: np.ndarray, seg_curv: np.ndarray, seg_len: np.ndarray, max_len: float,
+    seg_roll: np.ndarray, seg_curv: np.ndarray, seg_len: np.ndarray, max_len: float, min_margin: float,
 ) -> int:
     """Analytic expansion from (x, y, yaw, roll) to (gx, gy, gyaw) arriving with roll ``groll``.
 
     A Dubins path at the minimum radius is turned into roll-held segments (±φmax on arcs, 0 on straights).
     Each roll change shifts the centre sideways (eq. 1), so the Dubins target is corrected by fixed-point
     iteration until the rolled end lands on the goal (< 0.1 mm). Returns the number of segments written,
-    or 0 when no valid, collision-free shot exists.
+    or 0 when no valid shot keeps a footprint margin of at least ``min_margin`` (0 = collision-free).
     """
     radius, rho, max_roll = p[P_RADIUS], p[P_RHO], p[P_MAX_ROLL]
     tx, ty = gx, gy
@@ -151,15 +154,15 @@ def try_shot(
     cx, cy, cyaw, croll = x, y, yaw, roll
     worst = math.inf
     for k in range(n):
-        worst = _motion_margin(clear, p, offx, offy, cx, cy, cyaw, seg_roll[k] - croll, seg_curv[k],
-                               seg_len[k], worst)
-        if worst < 0.0:
+        worst = _motion_margin(clear, blocked, p, offx, offy, px, py, cx, cy, cyaw, seg_roll[k] - croll,
+                               seg_curv[k], seg_len[k], worst)
+        if worst < min_margin:
             return 0
         cx, cy = roll_shift(cx, cy, cyaw, radius, seg_roll[k] - croll)
         cx, cy, cyaw = arc_step(cx, cy, cyaw, seg_curv[k], seg_len[k])
         croll = seg_roll[k]
-    worst = _motion_margin(clear, p, offx, offy, cx, cy, cyaw, groll - croll, 0.0, 0.0, worst)
-    if worst < 0.0:
+    worst = _motion_margin(clear, blocked, p, offx, offy, px, py, cx, cy, cyaw, groll - croll, 0.0, 0.0, worst)
+    if worst < min_margin:
         return 0
     return n
 
@@ -177,16 +180,23 @@ def shot_length(radius: float, roll: float, groll: float, seg_roll: np.ndarray, 
 
 @njit(cache=True)
 def shortcut(
-    clear: np.ndarray, p: np.ndarray, offx: np.ndarray, offy: np.ndarray, knots: np.ndarray, cum: np.ndarray,
+    clear: np.ndarray, blocked: np.ndarray, p: np.ndarray, offx: np.ndarray, offy: np.ndarray, px: np.ndarray,
+    py: np.ndarray, knots: np.ndarray, cum: np.ndarray,
     max_tries: int, out_ij: np.ndarray, out_roll: np.ndarray, out_curv: np.ndarray, out_len: np.ndarray,
     out_n: np.ndarray,
 ) -> int:
     """Greedy shortcutting: from knot i, connect to the farthest knot j reachable by a valid, shorter shot.
 
     knots (n, 4) are poses (x, y, yaw, roll) at motion ends; cum[i] is the distance travelled up to knot i.
-    At most ``max_tries`` candidate j are tried per i. Returns the number of shortcuts written.
+    At most ``max_tries`` candidate j are tried per i. A shortcut may not come closer to the obstacles than
+    the preferred clearance p[P_PREFERRED], unless the stretch it replaces already did (its knots' smallest
+    margin). Returns the number of shortcuts written.
     """
     n = knots.shape[0]
+    knot_margin = np.empty(n)
+    for k in range(n):
+        knot_margin[k] = _motion_margin(clear, blocked, p, offx, offy, px, py, knots[k, 0], knots[k, 1],
+                                        knots[k, 2], 0.0, 0.0, 0.0, math.inf)
     sr = np.zeros(MAX_SHOT_SEGS)
     sc = np.zeros(MAX_SHOT_SEGS)
     sl = np.zeros(MAX_SHOT_SEGS)
@@ -201,8 +211,12 @@ def shortcut(
             if math.hypot(knots[j, 0] - knots[i, 0], knots[j, 1] - knots[i, 1]) >= budget:
                 j -= stride
                 continue
-            m = try_shot(clear, p, offx, offy, knots[i, 0], knots[i, 1], knots[i, 2], knots[i, 3],
-                         knots[j, 0], knots[j, 1], knots[j, 2], knots[j, 3], sr, sc, sl, budget)
+            stretch = p[P_PREFERRED]
+            for k in range(i, j + 1):
+                stretch = min(stretch, knot_margin[k])
+            m = try_shot(clear, blocked, p, offx, offy, px, py, knots[i, 0], knots[i, 1], knots[i, 2],
+                         knots[i, 3], knots[j, 0], knots[j, 1], knots[j, 2], knots[j, 3], sr, sc, sl, budget,
+                         max(stretch, 0.0))
             if m > 0:
                 out_ij[count, 0] = i
                 out_ij[count, 1] = j
@@ -223,7 +237,8 @@ def shortcut(
 
 @njit(cache=True)
 def search_chunk(
-    clear: np.ndarray, htab: np.ndarray, rs: np.ndarray, p: np.ndarray, offx: np.ndarray, offy: np.ndarray,
+    clear: np.ndarray, blocked: np.ndarray, htab: np.ndarray, rs: np.ndarray, p: np.ndarray, offx: np.ndarray,
+    offy: np.ndarray, px: np.ndarray, py: np.ndarray,
     rolls: np.ndarray, curvs: np.ndarray, roll_bins: np.ndarray, n_roll_bins: int,
     node_f: np.ndarray, node_i: np.ndarray,
     heap_keys: np.ndarray, heap_vals: np.ndarray, heap_size: np.ndarray,
@@ -240,6 +255,8 @@ def search_chunk(
     step = p[P_STEP]
     allow_reverse = p[P_ALLOW_REVERSE] > 0.5
     greed = p[P_GREED]
+    goal_margin = _motion_margin(clear, blocked, p, offx, offy, px, py, p[P_GX], p[P_GY], p[P_GYAW], 0.0, 0.0, 0.0,
+                                 math.inf)
     done = 0
     while done < max_expansions:
         # 1. Pop the cheapest open node; skip it if its (cell, yaw bin, roll) was already expanded.
@@ -259,7 +276,7 @@ def search_chunk(
         gx, gy = roll_shift(x, y, yaw, radius, -roll)
         if (math.hypot(gx - p[P_GX], gy - p[P_GY]) <= p[P_TOL_XY]
                 and abs(wrap(yaw - p[P_GYAW])) <= p[P_TOL_YAW]
-                and _motion_margin(clear, p, offx, offy, x, y, yaw, -roll, 0.0, 0.0, math.inf) >= 0.0):
+                and _motion_margin(clear, blocked, p, offx, offy, px, py, x, y, yaw, -roll, 0.0, 0.0, math.inf) >= 0.0):
             counters[C_RESULT] = k
             counters[C_SHOT_SEGS] = 0
             return FOUND
@@ -270,8 +287,11 @@ def search_chunk(
             counters[C_SINCE_SHOT] = 0
             # forward-only: the Dubins shot is optimal, take it; with reversing a forward shot may be far
             # longer than a manoeuvre with a reverse leg, so take it only when it is within 2× of h
-            n = try_shot(clear, p, offx, offy, x, y, yaw, roll, p[P_GX], p[P_GY], p[P_GYAW], 0.0,
-                         seg_roll, seg_curv, seg_len, 2.0 * h_here + 1e-6 if allow_reverse else math.inf)
+            # the shot keeps the preferred clearance where its two ends have it
+            here = _motion_margin(clear, blocked, p, offx, offy, px, py, x, y, yaw, 0.0, 0.0, 0.0, math.inf)
+            keep = max(0.0, min(p[P_PREFERRED], here, goal_margin))
+            n = try_shot(clear, blocked, p, offx, offy, px, py, x, y, yaw, roll, p[P_GX], p[P_GY], p[P_GYAW], 0.0,
+                         seg_roll, seg_curv, seg_len, 2.0 * h_here + 1e-6 if allow_reverse else math.inf, keep)
             if n > 0:
                 counters[C_RESULT] = k
                 counters[C_SHOT_SEGS] = n
@@ -284,8 +304,8 @@ def search_chunk(
                 break
             for ri in range(n_roll):
                 d_roll = rolls[ri] - roll
-                margin = _motion_margin(clear, p, offx, offy, x, y, yaw, d_roll, curvs[ri], direction * step,
-                                        math.inf)
+                margin = _motion_margin(clear, blocked, p, offx, offy, px, py, x, y, yaw, d_roll, curvs[ri],
+                                        direction * step, math.inf)
                 if margin < 0.0:
                     continue
                 cx, cy = roll_shift(x, y, yaw, radius, d_roll)

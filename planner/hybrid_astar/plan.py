@@ -75,6 +75,7 @@ def plan_path(
         if check["collides"]:
             raise NoValidPathFound(
                 f"the path found on the sliced grid touches the mesh {check['mesh']} at state "
-                f"{check['first_index']} (exact fcl check); the mesh has geometry the height slice missed"
+                f"{check['first_index']} (exact fcl check); the mesh has geometry the height slice missed",
+                planning_time_s=result.planning_time_s, expansions=result.expansions,
             )
     return result

@@ -46,7 +46,7 @@ from planner.errors import (
 from planner.hybrid_astar import core
 from planner.hybrid_astar.heuristics import HolonomicHeuristic, auto_downsample, coarse_cost_grid, reeds_shepp_table
 from planner.kinematics import child_pose, densify_motions, wrap
-from planner.maps.clearance import CircleFootprint, ClearanceMap
+from planner.maps.clearance import CircleFootprint, ClearanceMap, inscribed_radius
 from planner.occupancy import OccupancyGrid
 from planner.result import PlanResult, build_states
 from planner.robot import RobotProfile
@@ -54,6 +54,9 @@ from planner.robot import RobotProfile
 log = logging.getLogger(__name__)
 
 RS_CELL_M = 0.1  # sampling of the Reeds–Shepp heuristic table (m)
+CLEARANCE_REACH_M = 2.0  # the reported min_clearance_m is capped here (farther obstacles do not matter)
+GOAL_CHECK_AFTER = 20_000  # expansions without a path before the goal's surroundings are searched (fail fast)
+GOAL_CHECK_BUDGET = 40_000  # expansions that search may take
 CLOSED_SET_BUDGET_MB = 1024  # the closed-set bitset of one plan may not exceed this (≈ 9000² cells at defaults)
 
 
@@ -66,7 +69,7 @@ class PlannerOptions:
     n_yaw_bins: int = 72              # closed-set heading bins (5°)
     n_roll_bins: int = 3              # closed-set roll bins (left/upright/right; 0 = one per held roll)
     step_m: float = 0.0               # arc length per expansion; 0 = automatic (see ``resolved_step``)
-    allow_reverse: bool = False
+    allow_reverse: bool | None = None  # None = the robot's own ``reversible`` (true for the spheres)
     n_circles: int = 3                # covering circles of the footprint (paper 001 Fig. 6)
     allow_unknown: bool = False
     goal_tolerance_m: float = 0.1
@@ -144,6 +147,81 @@ class PlannerOptions:
 
 Pose = tuple[float, float, float]
 
+_compiled = False
+
+
+def warm_up() -> float:
+    """Compile (or load from numba's on-disk cache) every kernel of the search by planning once on a small
+    open map, so that no plan's time limit is spent compiling. Runs once per process; returns the seconds
+    it took (0 when already done)."""
+    global _compiled
+    if _compiled:
+        return 0.0
+    _compiled = True
+    t0 = time.perf_counter()
+    from planner.robot import load_robot
+
+    occupied = np.zeros((80, 80), dtype=bool)
+    occupied[30:50, 38:42] = True
+    grid = OccupancyGrid.from_occupied(occupied, 0.1, name="warm-up")
+    robot = load_robot()
+    for reverse in (False, True):
+        HybridAStar(grid, robot, PlannerOptions(allow_reverse=reverse, time_limit_s=600.0)).plan(
+            (1.5, 1.5, 0.0), (6.5, 6.5, math.pi / 2))
+    took = time.perf_counter() - t0
+    log.info("compiled the search kernels in %.2f s (once per process)", took)
+    return took
+
+
+class _Search:
+    """The arrays of one search (open heap, nodes, closed bitset) and chunked calls of the compiled loop."""
+
+    def __init__(self, planner: HybridAStar, start: Pose, goal: Pose, heur: HolonomicHeuristic,
+                 o: PlannerOptions) -> None:
+        self.planner = planner
+        self.heur = heur
+        p = planner._params(goal)
+        p[core.P_HOX], p[core.P_HOY] = heur.origin_xy
+        p[core.P_HCELL] = heur.cell_m
+        self.p = p
+        grid = planner.grid
+        n_keys = grid.width * grid.height * o.n_yaw_bins * planner.n_roll_bins
+        self.closed = np.zeros(n_keys // 8 + 1, dtype=np.uint8)
+        cap = 1 << 16
+        self.node_f = np.empty((cap, 5))
+        self.node_i = np.empty((cap, 3), dtype=np.int64)
+        self.heap_keys = np.empty(cap * 2)
+        self.heap_vals = np.empty(cap * 2, dtype=np.int64)
+        self.heap_size = np.zeros(1, dtype=np.int64)
+        self.counters = np.zeros(8, dtype=np.int64)
+        self.seg_roll, self.seg_curv, self.seg_len = (np.zeros(core.MAX_SHOT_SEGS) for _ in range(3))
+        self.node_f[0] = (*start, 0.0, 0.0)
+        self.node_i[0] = (-1, o.n_rolls // 2, 0)
+        self.counters[core.C_NODES] = 1
+        core.heap_push(self.heap_keys, self.heap_vals, self.heap_size, heur(start[0], start[1]), 0)
+
+    @property
+    def expansions(self) -> int:
+        return int(self.counters[core.C_EXPANSIONS])
+
+    def step(self, budget: int) -> int:
+        """Run up to ``budget`` expansions; returns the compiled loop's status (FULL is handled here)."""
+        pl = self.planner
+        while True:
+            status = int(core.search_chunk(
+                pl.clearance.clearance, pl.clearance.blocked, self.heur.table, pl.rs_table, self.p,
+                pl.footprint.offsets_x, pl.footprint.offsets_y, pl._px, pl._py,
+                pl.rolls, pl.curvatures, pl.roll_bins, pl.n_roll_bins, self.node_f, self.node_i, self.heap_keys,
+                self.heap_vals, self.heap_size, self.closed, self.counters, budget,
+                self.seg_roll, self.seg_curv, self.seg_len,
+            ))
+            if status != core.FULL:
+                return status
+            self.node_f = np.concatenate([self.node_f, np.empty_like(self.node_f)])
+            self.node_i = np.concatenate([self.node_i, np.empty_like(self.node_i)])
+            self.heap_keys = np.concatenate([self.heap_keys, np.empty_like(self.heap_keys)])
+            self.heap_vals = np.concatenate([self.heap_vals, np.empty_like(self.heap_vals)])
+
 
 class HybridAStar:
     """Plans rollable paths for one robot on one map; reuse it for many queries on the same map.
@@ -167,6 +245,9 @@ class HybridAStar:
         self.grid = grid
         self.robot = robot
         self.footprint = CircleFootprint.for_robot(robot, self.options.n_circles)
+        self.polygon = robot.footprint_polygon
+        self._px = np.ascontiguousarray(self.polygon[:, 0])
+        self._py = np.ascontiguousarray(self.polygon[:, 1])
         self.clearance = ClearanceMap(grid, self.options.allow_unknown)
         kmax = robot.max_curvature
         kappas = np.linspace(-kmax, kmax, self.options.n_rolls)
@@ -177,14 +258,19 @@ class HybridAStar:
         # roll index → closed-set bin: equal curvature intervals, upright always in the middle bin
         self.roll_bins = np.rint((kappas / kmax + 1.0) / 2.0 * (n_bins - 1)).astype(np.int64)
         self.n_roll_bins = n_bins
-        offsets = np.hypot(self.footprint.offsets_x, self.footprint.offsets_y)
-        self.centre_threshold_m = self.footprint.radius_m - float(offsets.min()) - grid.resolution_m
+        # A pose is only free where the disc inscribed in the polygon around the centre p is free. With a the
+        # centre of p's cell and b the nearest blocked cell centre (d = |a − b|), the nearest blocked square
+        # is at most |p − b| − res/2 ≤ d + res·(1/√2 − 1/2) from p; the stored clearance is d − √2·res. So
+        # a free pose needs stored clearance ≥ r_in − (√2 + 1/√2 − 1/2)·res (admissible for the heuristic).
+        self.centre_threshold_m = inscribed_radius(self.polygon) - 1.63 * grid.resolution_m
         o = self.options
-        self.rs_table = (reeds_shepp_table(robot.min_turning_radius_m, o.n_yaw_bins, RS_CELL_M) if o.allow_reverse
+        self.reverse = robot.reversible if o.allow_reverse is None else o.allow_reverse
+        self.rs_table = (reeds_shepp_table(robot.min_turning_radius_m, o.n_yaw_bins, RS_CELL_M) if self.reverse
                          else np.zeros((1, 1, 1)))
         self.heuristic_factor = o.heuristic_downsample or auto_downsample(grid.data.shape)
         self.holonomic_mult = coarse_cost_grid(self.clearance.clearance, self.centre_threshold_m,
-                                               self.footprint.radius_m, o.proximity_range_m, o.cost_penalty,
+                                               self.footprint.radius_m,
+                                               max(o.proximity_range_m, robot.preferred_clearance_m), o.cost_penalty,
                                                self.heuristic_factor)
 
     def holonomic(self, goal_xy: tuple[float, float], start_xy: tuple[float, float] | None = None
@@ -203,8 +289,8 @@ class HybridAStar:
         return max(math.sqrt(2) * self.grid.resolution_m, self.robot.min_turning_radius_m * yaw_bin)
 
     def pose_margin(self, pose: Pose) -> float:
-        """Footprint margin (m) at a pose: ≥ 0 means free."""
-        return float(self.clearance.pose_margin(self.footprint, np.array([pose]))[0])
+        """Footprint margin (m) at a pose: ≥ 0 means free (circles first, the exact polygon where they touch)."""
+        return float(self.clearance.footprint_margins(self.footprint, self.polygon, np.array([pose]))[0])
 
     def _params(self, goal: Pose) -> np.ndarray:
         o = self.options
@@ -220,14 +306,17 @@ class HybridAStar:
         p[core.P_SPACING] = 0.5 * self.grid.resolution_m
         p[core.P_NON_STRAIGHT], p[core.P_CHANGE] = o.non_straight_penalty, o.change_penalty
         p[core.P_REVERSE], p[core.P_SWITCH] = o.reverse_penalty, o.switch_cost_m
-        p[core.P_COST_PENALTY], p[core.P_PROX_RANGE] = o.cost_penalty, o.proximity_range_m
+        p[core.P_COST_PENALTY] = o.cost_penalty
+        # the proximity cost reaches at least as far as the room the robot would like to keep
+        p[core.P_PROX_RANGE] = max(o.proximity_range_m, self.robot.preferred_clearance_m)
+        p[core.P_PREFERRED] = self.robot.preferred_clearance_m
         p[core.P_GREED], p[core.P_SHOT_RATIO] = o.greed, o.analytic_ratio_m
         p[core.P_MAX_ROLL] = self.robot.max_roll_rad
-        p[core.P_USE_DUBINS] = 0.0 if o.allow_reverse else 1.0
-        p[core.P_USE_RS] = 1.0 if o.allow_reverse else 0.0
+        p[core.P_USE_DUBINS] = 0.0 if self.reverse else 1.0
+        p[core.P_USE_RS] = 1.0 if self.reverse else 0.0
         p[core.P_RS_CELL] = RS_CELL_M
         p[core.P_RS_HALF] = self.rs_table.shape[2] // 2
-        p[core.P_ALLOW_REVERSE] = 1.0 if o.allow_reverse else 0.0
+        p[core.P_ALLOW_REVERSE] = 1.0 if self.reverse else 0.0
         p[core.P_N_YAW] = o.n_yaw_bins
         return p
 
@@ -241,15 +330,19 @@ class HybridAStar:
         margin = self.pose_margin(pose)
         if margin < 0:
             cls2 = StartOccupied if which == "start" else GoalOccupied
-            why = ("the footprint's covering circles reach beyond the map's edge" if math.isinf(margin) else
-                   f"the footprint's covering circles are {-margin:.3f} m too close to an obstacle")
+            why = ("the footprint (padded by "
+                   f"{self.robot.footprint_padding_m:g} m) overlaps an obstacle or the map's edge")
             raise cls2(f"{which} ({pose[0]:.3f}, {pose[1]:.3f}) is in collision: {why}")
 
     def plan(
         self, start: Pose, goal: Pose, *, time_limit_s: float | None = None,
         cancel: Callable[[], bool] | None = None,
     ) -> PlanResult:
-        """Plan from ``start`` to ``goal`` (x, y, yaw in the map frame; the sphere starts and ends upright)."""
+        """Plan from ``start`` to ``goal`` (x, y, yaw in the map frame; the sphere starts and ends upright).
+
+        The time limit is the search's own: the one-off compilation (:func:`warm_up`) happens before the clock.
+        """
+        warm_up()
         t0 = time.perf_counter()
         o = self.options if time_limit_s is None else replace(self.options, time_limit_s=time_limit_s)
         o.validate()
@@ -262,67 +355,49 @@ class HybridAStar:
         if not math.isfinite(heur(start[0], start[1])):
             raise NoValidPathFound(
                 f"no path: the goal ({goal[0]:.2f}, {goal[1]:.2f}) cannot be reached from the start "
-                f"({start[0]:.2f}, {start[1]:.2f}) by any route wide enough for the robot"
+                f"({start[0]:.2f}, {start[1]:.2f}) by any route wide enough for the robot",
+                planning_time_s=time.perf_counter() - t0,
             )
-        p = self._params(goal)
-        p[core.P_HOX], p[core.P_HOY] = heur.origin_xy
-        p[core.P_HCELL] = heur.cell_m
-        n_keys = self.grid.width * self.grid.height * o.n_yaw_bins * self.n_roll_bins
-        closed = np.zeros(n_keys // 8 + 1, dtype=np.uint8)
-        cap = 1 << 16
-        node_f = np.empty((cap, 5))
-        node_i = np.empty((cap, 3), dtype=np.int64)
-        heap_keys = np.empty(cap * 2)
-        heap_vals = np.empty(cap * 2, dtype=np.int64)
-        heap_size = np.zeros(1, dtype=np.int64)
-        counters = np.zeros(8, dtype=np.int64)
-        seg_roll, seg_curv, seg_len = (np.zeros(core.MAX_SHOT_SEGS) for _ in range(3))
-        mid = o.n_rolls // 2
-        node_f[0] = (*start, 0.0, 0.0)
-        node_i[0] = (-1, mid, 0)
-        counters[core.C_NODES] = 1
-        h0 = heur(start[0], start[1])
-        core.heap_push(heap_keys, heap_vals, heap_size, h0, 0)
-        status = core.RUNNING
+        run = _Search(self, start, goal, heur, o)
+        checked_goal = False
         while True:
-            budget = min(o.chunk_expansions, o.max_iterations - int(counters[core.C_EXPANSIONS]))
-            status = core.search_chunk(
-                self.clearance.clearance, heur.table, self.rs_table, p, self.footprint.offsets_x,
-                self.footprint.offsets_y,
-                self.rolls, self.curvatures, self.roll_bins, self.n_roll_bins, node_f, node_i, heap_keys, heap_vals,
-                heap_size, closed, counters,
-                budget, seg_roll, seg_curv, seg_len,
-            )
+            status = run.step(min(o.chunk_expansions, o.max_iterations - run.expansions))
             if status == core.FOUND:
                 break
             if status == core.EXHAUSTED:
                 raise NoValidPathFound(
-                    f"no valid path: the search exhausted every reachable state "
-                    f"({int(counters[core.C_EXPANSIONS])} expansions)"
-                )
-            if status == core.FULL:
-                node_f = np.concatenate([node_f, np.empty_like(node_f)])
-                node_i = np.concatenate([node_i, np.empty_like(node_i)])
-                heap_keys = np.concatenate([heap_keys, np.empty_like(heap_keys)])
-                heap_vals = np.concatenate([heap_vals, np.empty_like(heap_vals)])
-                continue
-            if counters[core.C_EXPANSIONS] >= o.max_iterations:
-                raise NoValidPathFound(f"no valid path within the iteration cap of {o.max_iterations} expansions")
+                    f"no valid path: the search exhausted every state reachable from the start "
+                    f"({run.expansions} expansions)", planning_time_s=time.perf_counter() - t0,
+                    expansions=run.expansions)
+            if not checked_goal and run.expansions >= GOAL_CHECK_AFTER:
+                # 5b. Fail fast: a bounded search of the reverse problem (from the goal, every motion run
+                # backwards) that exhausts proves the goal pose cannot be approached at all.
+                checked_goal = True
+                back = self._reverse_search(start, goal, o)
+                if back is not None:
+                    raise NoValidPathFound(
+                        f"no valid path: the goal pose ({goal[0]:.2f}, {goal[1]:.2f}, yaw {goal[2]:.2f}) can be "
+                        f"reached from only {back} states around it, none of them the start's (a dead end or a "
+                        f"heading into an obstacle)", planning_time_s=time.perf_counter() - t0,
+                        expansions=run.expansions)
+            if run.expansions >= o.max_iterations:
+                raise NoValidPathFound(f"no valid path within the iteration cap of {o.max_iterations} expansions",
+                                       planning_time_s=time.perf_counter() - t0, expansions=run.expansions)
             if cancel is not None and cancel():
-                raise PlannerCancelled("planning was cancelled")
+                raise PlannerCancelled("planning was cancelled", planning_time_s=time.perf_counter() - t0,
+                                       expansions=run.expansions)
             if time.perf_counter() > deadline:
                 raise PlannerTimedOut(
-                    f"no path found within the time limit of {o.time_limit_s:g} s "
-                    f"({int(counters[core.C_EXPANSIONS])} expansions)"
-                )
-        motions = self._motions(node_f, node_i, int(counters[core.C_RESULT]),
-                                seg_roll, seg_curv, seg_len, int(counters[core.C_SHOT_SEGS]))
+                    f"no path found within the time limit of {o.time_limit_s:g} s ({run.expansions} expansions)",
+                    planning_time_s=time.perf_counter() - t0, expansions=run.expansions)
+        motions = self._motions(run.node_f, run.node_i, int(run.counters[core.C_RESULT]),
+                                run.seg_roll, run.seg_curv, run.seg_len, int(run.counters[core.C_SHOT_SEGS]))
         raw_length = self._length(start, motions)
         t_search = time.perf_counter() - t0
         if o.smooth:
             length = raw_length
             for k in range(o.smooth_passes):
-                candidate = self._shortcut(start, self._subdivide(motions) if k else motions, p,
+                candidate = self._shortcut(start, self._subdivide(motions) if k else motions, run.p,
                                            o.smooth_max_tries)
                 new_length = self._length(start, candidate)
                 if new_length > length - 1e-3:
@@ -331,32 +406,49 @@ class HybridAStar:
         t_smooth = time.perf_counter() - t0 - t_search
         poses = self._densify(start, motions, o.state_spacing_m)
         fine = self._densify(start, motions, self.grid.resolution_m / 4)
-        margins = self.clearance.pose_margin(self.footprint, fine[:, :3])
-        # The distance-transform margin is a lower bound of the exact one (by at most √2·res + one cell):
-        # only poses that could be the closest or in contact need the exact check.
-        near = margins <= margins.min() + 3.0 * self.grid.resolution_m
-        margins = self.clearance.exact_pose_margin(self.footprint, fine[near, :3])
+        margins = self.clearance.footprint_margins(self.footprint, self.polygon, fine[:, :3])
         if margins.min() < 0:
-            raise NoValidPathFound(
-                f"internal check failed: the exact re-check of the final path found a collision "
-                f"({-margins.min():.3f} m deep)"
-            )
+            raise NoValidPathFound("internal check failed: the exact re-check of the final path found a collision")
+        # The circles' margin is a lower bound of the polygon's clearance: only poses whose bound could beat
+        # the best exact distance found so far are measured exactly.
+        clearance_m = self.clearance.min_footprint_distance(self.polygon, fine[:, :3], margins, CLEARANCE_REACH_M)
         elapsed = time.perf_counter() - t0
         return PlanResult(
             status="exact",
             error_code=0,
             error_msg="",
             planning_time_s=elapsed,
-            expansions=int(counters[core.C_EXPANSIONS]),
+            expansions=run.expansions,
             robot=self.robot,
             map_name=self.grid.name,
             start=start,
             goal=goal,
             states=build_states(poses, self.robot),
-            min_clearance_m=float(margins.min()),
-            analytic_segments=int(counters[core.C_SHOT_SEGS]),
+            min_clearance_m=clearance_m,
+            analytic_segments=int(run.counters[core.C_SHOT_SEGS]),
             extra={"unsmoothed_length_m": raw_length, "search_time_s": t_search, "smoothing_time_s": t_smooth},
         )
+
+    def _reverse_search(self, start: Pose, goal: Pose, o: PlannerOptions) -> int | None:
+        """Search the reverse problem within :data:`GOAL_CHECK_BUDGET` expansions: from the goal to the start
+        with every motion run backwards. A path run backwards is rolled by the same kinematics with the
+        heading turned by π (and the roll mirrored, which maps the symmetric roll set onto itself); a
+        reversible robot's motion set is its own reverse. Returns the number of states from which the goal
+        can be reached when that search exhausts them all (so the start is not among them), else None."""
+        flip = 0.0 if self.reverse else math.pi
+        back_start = (goal[0], goal[1], wrap(goal[2] + flip))
+        back_goal = (start[0], start[1], wrap(start[2] + flip))
+        if self.pose_margin(back_start) < 0:
+            return None
+        heur = self.holonomic(back_goal[:2], back_start[:2])
+        run = _Search(self, back_start, back_goal, heur, o)
+        while run.expansions < GOAL_CHECK_BUDGET:
+            status = run.step(min(o.chunk_expansions, GOAL_CHECK_BUDGET - run.expansions))
+            if status == core.EXHAUSTED:
+                return run.expansions
+            if status == core.FOUND:
+                return None
+        return None
 
     def _knots(self, start: Pose, motions: list[tuple[float, float, float]]) -> np.ndarray:
         """Pose (x, y, yaw, roll) and distance travelled at the start and after every motion: (n+1, 5)."""
@@ -391,7 +483,8 @@ class HybridAStar:
         out_ij = np.zeros((n, 2), dtype=np.int64)
         out_roll, out_curv, out_len = (np.zeros((n, core.MAX_SHOT_SEGS)) for _ in range(3))
         out_n = np.zeros(n, dtype=np.int64)
-        count = core.shortcut(self.clearance.clearance, p, self.footprint.offsets_x, self.footprint.offsets_y,
+        count = core.shortcut(self.clearance.clearance, self.clearance.blocked, p, self.footprint.offsets_x,
+                              self.footprint.offsets_y, self._px, self._py,
                               np.ascontiguousarray(knots[:, :4]), np.ascontiguousarray(knots[:, 4]), max_tries,
                               out_ij, out_roll, out_curv, out_len, out_n)
         result: list[tuple[float, float, float]] = []

@@ -3,12 +3,16 @@ robot's footprint fits there. Every wing asks it: the Hybrid A* (covering circle
 Fig. 6), the MPC tracker (obstacle circles on boundary cells, paper 001 eq. 15f), the closed-loop
 simulation (exact footprint clearance), the Spherobot swept-disc check and the map generator.
 
-Three-circle footprint collision checking (paper 001 §4.1, Fig. 6):
+Footprint collision in two tiers (paper 001 §4.1, Fig. 6, then exact):
 
-The robot's footprint (a ``footprint_length_m`` × ``footprint_width_m`` rectangle centred on the sphere,
-length along the heading) is covered by N circles (default 3) of radius r_c placed along its longer
-axis; their union covers the rectangle. Obstacles are "inflated" by r_c through a Euclidean distance
-transform, so a pose is free when every circle centre has clearance ≥ r_c: O(N) lookups per pose.
+1. *Covering circles* (the paper's filter). The robot's padded footprint polygon
+   (:attr:`planner.robot.RobotProfile.footprint_polygon`) is covered by 1..N equal circles along its
+   longer axis; the count whose union overshoots the polygon least is used (one circle for a round
+   sphere, three for a long body). Obstacles are "inflated" by r_c through a Euclidean distance
+   transform, so a pose is certainly free when every circle centre has clearance ≥ r_c: O(N) lookups.
+2. *The polygon decides* where the circles say "maybe": the blocked cells under the polygon's bounding
+   box are tested exactly against the polygon (a cell square meets the polygon when its centre is inside
+   or an edge of the polygon crosses it). Exact to the grid: a gap the footprint fits through is found.
 
 Clearance is conservative: the distance transform measures cell centre to cell centre (d), and a point
 anywhere in a cell is at least d − √2·res from any point of the nearest blocked cell, so that is what
@@ -23,10 +27,12 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 from scipy.ndimage import distance_transform_edt
-from scipy.spatial import cKDTree
 
 from planner.occupancy import OccupancyGrid
 from planner.robot import RobotProfile
+
+
+SAMPLE_SPACING_M = 0.005  # spacing of the polygon samples the covering circles are sized on
 
 
 @dataclass(frozen=True)
@@ -38,19 +44,51 @@ class CircleFootprint:
     radius_m: float
 
     @classmethod
-    def for_robot(cls, robot: RobotProfile, n_circles: int = 3) -> CircleFootprint:
-        """Cover the footprint rectangle with ``n_circles`` equal circles along its longer axis."""
+    def covering(cls, polygon: np.ndarray, n_circles: int) -> CircleFootprint:
+        """``n_circles`` equal circles, evenly spaced along the longer axis of the polygon's bounding box,
+        with the smallest radius whose union covers the polygon (checked on its edges and a dense interior
+        grid: for a convex polygon the farthest point of each circle's share lies on the boundary)."""
         if n_circles < 1:
             raise ValueError("n_circles must be >= 1")
-        length, width = robot.footprint_length_m, robot.footprint_width_m
-        long_axis, short_axis = max(length, width), min(length, width)
-        seg = long_axis / n_circles
-        centres = (np.arange(n_circles) + 0.5) * seg - long_axis / 2.0
-        r_c = math.hypot(seg / 2.0, short_axis / 2.0)
-        zeros = np.zeros(n_circles)
-        if length >= width:
-            return cls(centres, zeros, r_c)
-        return cls(zeros, centres, r_c)
+        poly = np.asarray(polygon, float)
+        lo, hi = poly.min(axis=0), poly.max(axis=0)
+        mid = (lo + hi) / 2.0
+        axis = 0 if hi[0] - lo[0] >= hi[1] - lo[1] else 1
+        seg = (hi[axis] - lo[axis]) / n_circles
+        along = lo[axis] + (np.arange(n_circles) + 0.5) * seg
+        centres = np.tile(mid, (n_circles, 1))
+        centres[:, axis] = along
+        samples = _polygon_samples(poly, SAMPLE_SPACING_M)
+        dist = np.hypot(samples[:, None, 0] - centres[None, :, 0], samples[:, None, 1] - centres[None, :, 1])
+        # every boundary point is within half a spacing of a sample
+        radius = float(dist.min(axis=1).max()) + 0.5 * SAMPLE_SPACING_M
+        return cls(centres[:, 0].copy(), centres[:, 1].copy(), radius)
+
+    @classmethod
+    def for_polygon(cls, polygon: np.ndarray, max_circles: int = 3) -> CircleFootprint:
+        """The covering (1..``max_circles`` circles) that overshoots the polygon least in any direction."""
+        poly = np.asarray(polygon, float)
+        best: CircleFootprint | None = None
+        best_excess = math.inf
+        for n in range(1, max_circles + 1):
+            cover = cls.covering(poly, n)
+            excess = cover.excess(poly)
+            if excess < best_excess - 1e-6:
+                best, best_excess = cover, excess
+        if best is None:
+            raise ValueError("max_circles must be >= 1")
+        return best
+
+    @classmethod
+    def for_robot(cls, robot: RobotProfile, max_circles: int = 3) -> CircleFootprint:
+        """The covering of the robot's padded footprint polygon (see :meth:`for_polygon`)."""
+        return cls.for_polygon(robot.footprint_polygon, max_circles)
+
+    def excess(self, polygon: np.ndarray) -> float:
+        """How far (m) the circles' union reaches beyond the polygon, in the worst of 360 directions."""
+        u = np.stack([np.cos(np.radians(np.arange(360))), np.sin(np.radians(np.arange(360)))], axis=1)
+        reach = (u @ np.stack([self.offsets_x, self.offsets_y])).max(axis=1) + self.radius_m
+        return float((reach - (u @ np.asarray(polygon, float).T).max(axis=1)).max())
 
     def centres(self, x: float, y: float, yaw: float) -> np.ndarray:
         """World positions (N, 2) of the circle centres at pose (x, y, yaw)."""
@@ -58,6 +96,15 @@ class CircleFootprint:
         return np.stack(
             [x + c * self.offsets_x - s * self.offsets_y, y + s * self.offsets_x + c * self.offsets_y], axis=1
         )
+
+
+def inscribed_radius(polygon: np.ndarray) -> float:
+    """Radius (m) of the largest disc centred on the robot's origin that fits inside the polygon."""
+    poly = np.asarray(polygon, float)
+    a, b = poly, np.roll(poly, -1, axis=0)
+    ab = b - a
+    t = np.clip(-(a * ab).sum(axis=1) / np.maximum((ab * ab).sum(axis=1), 1e-300), 0.0, 1.0)
+    return float(np.hypot(*(a + t[:, None] * ab).T).min())
 
 
 def centre_distance(grid: OccupancyGrid, allow_unknown: bool = False) -> np.ndarray:
@@ -93,8 +140,6 @@ class ClearanceMap:
         self.origin_x = float(grid.origin[0])
         self.origin_y = float(grid.origin[1])
         self.resolution_m = float(grid.resolution_m)
-        self._tree: cKDTree | None = None
-        self._blocked_centres = np.zeros((0, 2))
 
     def at(self, xs: np.ndarray, ys: np.ndarray) -> np.ndarray:
         """Clearance at world points (vectorised); −inf outside the map."""
@@ -110,40 +155,242 @@ class ClearanceMap:
         clear = self.at(cx, cy).reshape(cx.shape)
         return clear.min(axis=1) - footprint.radius_m
 
-    def exact_pose_margin(self, footprint: CircleFootprint, poses: np.ndarray) -> np.ndarray:
-        """Per pose: min over circles of the *exact* distance to the nearest blocked cell square − r_c.
+    def footprint_margins(self, footprint: CircleFootprint, polygon: np.ndarray, poses: np.ndarray) -> np.ndarray:
+        """Per pose (rows x, y, yaw): the two-tier free-space margin of :func:`pose_margin_exact` (≥ 0 free)."""
+        poses = np.ascontiguousarray(np.atleast_2d(np.asarray(poses, float))[:, :3])
+        poly = np.asarray(polygon, float)
+        return _margins_exact(self.clearance, self.blocked, self.origin_x, self.origin_y, self.resolution_m, poses,
+                              footprint.offsets_x, footprint.offsets_y, footprint.radius_m,
+                              np.ascontiguousarray(poly[:, 0]), np.ascontiguousarray(poly[:, 1]))
 
-        Independent of the distance transform (used for the final fine re-check and the reported
-        clearance): blocked cells are squares of side ``resolution_m`` (the nearest square is among the
-        8 nearest cell centres); distances are capped at r_c + 1 m; leaving the map counts as −inf.
-        """
-        poses = np.atleast_2d(np.asarray(poses, float))
-        c, s = np.cos(poses[:, 2:3]), np.sin(poses[:, 2:3])
-        cx = (poses[:, 0:1] + c * footprint.offsets_x - s * footprint.offsets_y).ravel()
-        cy = (poses[:, 1:2] + s * footprint.offsets_x + c * footprint.offsets_y).ravel()
-        res = self.resolution_m
-        reach = footprint.radius_m + 1.0
-        dist = np.full(cx.size, reach)
-        if self._tree is None:
-            iy, ix = np.nonzero(self.blocked)
-            self._blocked_centres = np.column_stack(
-                [self.origin_x + (ix + 0.5) * res, self.origin_y + (iy + 0.5) * res]
-            )
-            self._tree = cKDTree(self._blocked_centres) if len(ix) else None
-        if self._tree is not None:
-            pts = np.column_stack([cx, cy])
-            k = min(8, len(self._blocked_centres))
-            _, idx = self._tree.query(pts, k=k, distance_upper_bound=reach)
-            idx = idx.reshape(len(pts), k)
-            valid = idx < len(self._blocked_centres)
-            centres = self._blocked_centres[np.where(valid, idx, 0)]
-            gap = np.maximum(np.abs(centres - pts[:, None, :]) - res / 2, 0.0)
-            exact = np.where(valid, np.hypot(gap[..., 0], gap[..., 1]), reach)
-            dist = np.minimum(dist, exact.min(axis=1))
-        w, h = self.grid.size_m
-        ex = np.minimum.reduce([cx - self.origin_x, self.origin_x + w - cx, cy - self.origin_y, self.origin_y + h - cy])
-        dist = np.where(ex < 0, -np.inf, np.minimum(dist, ex))
-        return dist.reshape(poses.shape[0], -1).min(axis=1) - footprint.radius_m
+    def footprint_distances(self, polygon: np.ndarray, poses: np.ndarray, reach_m: float = 1.0) -> np.ndarray:
+        """Per pose: the exact distance (m) from the footprint polygon to the nearest blocked cell square or
+        the map's edge, capped at ``reach_m``; 0 where the polygon meets a blocked cell or leaves the map."""
+        poses = np.ascontiguousarray(np.atleast_2d(np.asarray(poses, float))[:, :3])
+        poly = np.asarray(polygon, float)
+        return _distances(self.blocked, self.origin_x, self.origin_y, self.resolution_m, poses,
+                          np.ascontiguousarray(poly[:, 0]), np.ascontiguousarray(poly[:, 1]), reach_m)
+
+    def min_footprint_distance(self, polygon: np.ndarray, poses: np.ndarray, lower_m: np.ndarray,
+                               reach_m: float = 1.0) -> float:
+        """The smallest exact footprint distance over ``poses`` (capped at ``reach_m``), given a lower bound
+        ``lower_m`` of each pose's distance (e.g. the covering circles' margin): poses are measured in order
+        of their bound, each only as far as the best found so far, until no bound can beat it."""
+        poses = np.ascontiguousarray(np.atleast_2d(np.asarray(poses, float))[:, :3])
+        poly = np.asarray(polygon, float)
+        px, py = np.ascontiguousarray(poly[:, 0]), np.ascontiguousarray(poly[:, 1])
+        best = reach_m
+        for k in np.argsort(lower_m):
+            if lower_m[k] >= best:
+                break
+            d = polygon_distance(self.blocked, self.origin_x, self.origin_y, self.resolution_m,
+                                 poses[k, 0], poses[k, 1], poses[k, 2], px, py, best)
+            best = min(best, d)
+            if best <= 0.0:
+                break
+        return float(best)
+
+
+def _polygon_samples(poly: np.ndarray, spacing_m: float) -> np.ndarray:
+    """Points (m, 2) on every edge of the polygon (≤ ``spacing_m`` apart) and on a grid inside it."""
+    pts = [poly]
+    for a, b in zip(poly, np.roll(poly, -1, axis=0), strict=True):
+        n = max(2, int(math.ceil(np.hypot(*(b - a)) / spacing_m)))
+        t = np.linspace(0.0, 1.0, n)[:, None]
+        pts.append(a + t * (b - a))
+    lo, hi = poly.min(axis=0), poly.max(axis=0)
+    gx, gy = np.meshgrid(np.arange(lo[0], hi[0], 4 * spacing_m), np.arange(lo[1], hi[1], 4 * spacing_m))
+    grid = np.column_stack([gx.ravel(), gy.ravel()])
+    inside = np.array([_point_in_polygon(float(x), float(y), poly[:, 0], poly[:, 1]) for x, y in grid], bool)
+    pts.append(grid[inside])
+    return np.concatenate(pts)
+
+
+@njit(cache=True)
+def _point_in_polygon(x: float, y: float, px: np.ndarray, py: np.ndarray) -> bool:
+    """Even-odd rule."""
+    inside = False
+    n = px.size
+    j = n - 1
+    for i in range(n):
+        if (py[i] > y) != (py[j] > y):
+            xc = (px[j] - px[i]) * (y - py[i]) / (py[j] - py[i]) + px[i]
+            if x < xc:
+                inside = not inside
+        j = i
+    return inside
+
+
+@njit(cache=True)
+def _segment_meets_box(x0: float, y0: float, x1: float, y1: float,
+                       bx0: float, by0: float, bx1: float, by1: float) -> bool:
+    """Does the segment (x0, y0)–(x1, y1) meet the closed box [bx0, bx1] × [by0, by1]? (Liang–Barsky)"""
+    t0, t1 = 0.0, 1.0
+    dx, dy = x1 - x0, y1 - y0
+    for k in range(4):
+        if k == 0:
+            pp, q = -dx, x0 - bx0
+        elif k == 1:
+            pp, q = dx, bx1 - x0
+        elif k == 2:
+            pp, q = -dy, y0 - by0
+        else:
+            pp, q = dy, by1 - y0
+        if pp == 0.0:
+            if q < 0.0:
+                return False
+        else:
+            r = q / pp
+            if pp < 0.0:
+                if r > t1:
+                    return False
+                if r > t0:
+                    t0 = r
+            else:
+                if r < t0:
+                    return False
+                if r < t1:
+                    t1 = r
+    return True
+
+
+@njit(cache=True)
+def polygon_hits(
+    blocked: np.ndarray, ox: float, oy: float, res: float, x: float, y: float, yaw: float,
+    px: np.ndarray, py: np.ndarray,
+) -> bool:
+    """Does the footprint polygon (body frame px, py) at pose (x, y, yaw) meet a blocked cell or leave the map?
+
+    Exact for square cells: a blocked cell meets the polygon when its centre is inside it or one of its
+    edges crosses the cell. ``blocked`` is the (height, width) boolean grid.
+    """
+    c = math.cos(yaw)
+    s = math.sin(yaw)
+    n = px.size
+    wx = np.empty(n)
+    wy = np.empty(n)
+    for i in range(n):
+        wx[i] = x + c * px[i] - s * py[i]
+        wy[i] = y + s * px[i] + c * py[i]
+    h, w = blocked.shape
+    ix0 = int(math.floor((wx.min() - ox) / res))
+    ix1 = int(math.floor((wx.max() - ox) / res))
+    iy0 = int(math.floor((wy.min() - oy) / res))
+    iy1 = int(math.floor((wy.max() - oy) / res))
+    if ix0 < 0 or iy0 < 0 or ix1 >= w or iy1 >= h:
+        return True
+    for iy in range(iy0, iy1 + 1):
+        by0 = oy + iy * res
+        for ix in range(ix0, ix1 + 1):
+            if not blocked[iy, ix]:
+                continue
+            bx0 = ox + ix * res
+            if _point_in_polygon(bx0 + 0.5 * res, by0 + 0.5 * res, wx, wy):
+                return True
+            j = n - 1
+            for i in range(n):
+                if _segment_meets_box(wx[j], wy[j], wx[i], wy[i], bx0, by0, bx0 + res, by0 + res):
+                    return True
+                j = i
+    return False
+
+
+@njit(cache=True)
+def pose_margin_exact(
+    clear: np.ndarray, blocked: np.ndarray, ox: float, oy: float, res: float, x: float, y: float, yaw: float,
+    offx: np.ndarray, offy: np.ndarray, r_c: float, px: np.ndarray, py: np.ndarray,
+) -> float:
+    """Free-space margin (m) of the footprint at one pose: ≥ 0 means free.
+
+    The covering circles' margin when they are clear of every obstacle (a lower bound of the polygon's
+    clearance); otherwise the polygon decides: 0.0 when it fits, the (negative) circle margin when it hits.
+    """
+    m = pose_margin_nb(clear, ox, oy, res, x, y, yaw, offx, offy, r_c)
+    if m >= 0.0:
+        return m
+    if polygon_hits(blocked, ox, oy, res, x, y, yaw, px, py):
+        return m if m > -1e9 else -1e9
+    return 0.0
+
+
+@njit(cache=True)
+def _margins_exact(
+    clear: np.ndarray, blocked: np.ndarray, ox: float, oy: float, res: float, poses: np.ndarray,
+    offx: np.ndarray, offy: np.ndarray, r_c: float, px: np.ndarray, py: np.ndarray,
+) -> np.ndarray:
+    out = np.empty(poses.shape[0])
+    for k in range(poses.shape[0]):
+        out[k] = pose_margin_exact(clear, blocked, ox, oy, res, poses[k, 0], poses[k, 1], poses[k, 2],
+                                   offx, offy, r_c, px, py)
+    return out
+
+
+@njit(cache=True)
+def _point_segment(x: float, y: float, ax: float, ay: float, bx: float, by: float) -> float:
+    dx, dy = bx - ax, by - ay
+    den = dx * dx + dy * dy
+    t = 0.0 if den == 0.0 else min(1.0, max(0.0, ((x - ax) * dx + (y - ay) * dy) / den))
+    return math.hypot(ax + t * dx - x, ay + t * dy - y)
+
+
+@njit(cache=True)
+def polygon_distance(
+    blocked: np.ndarray, ox: float, oy: float, res: float, x: float, y: float, yaw: float,
+    px: np.ndarray, py: np.ndarray, reach_m: float,
+) -> float:
+    """Exact distance (m) from the footprint polygon at (x, y, yaw) to the nearest blocked cell square or the
+    map's edge, capped at ``reach_m``; 0 when they meet. Between two disjoint polygons the closest pair is a
+    vertex of one and an edge of the other, so polygon vertices are measured to each cell square and cell
+    corners to each polygon edge."""
+    if polygon_hits(blocked, ox, oy, res, x, y, yaw, px, py):
+        return 0.0
+    c = math.cos(yaw)
+    s = math.sin(yaw)
+    n = px.size
+    wx = np.empty(n)
+    wy = np.empty(n)
+    for i in range(n):
+        wx[i] = x + c * px[i] - s * py[i]
+        wy[i] = y + s * px[i] + c * py[i]
+    h, w = blocked.shape
+    best = reach_m
+    for i in range(n):  # the map's edge
+        best = min(best, wx[i] - ox, ox + w * res - wx[i], wy[i] - oy, oy + h * res - wy[i])
+    ix0 = max(0, int(math.floor((wx.min() - reach_m - ox) / res)))
+    ix1 = min(w - 1, int(math.floor((wx.max() + reach_m - ox) / res)))
+    iy0 = max(0, int(math.floor((wy.min() - reach_m - oy) / res)))
+    iy1 = min(h - 1, int(math.floor((wy.max() + reach_m - oy) / res)))
+    for iy in range(iy0, iy1 + 1):
+        by0 = oy + iy * res
+        for ix in range(ix0, ix1 + 1):
+            if not blocked[iy, ix]:
+                continue
+            bx0 = ox + ix * res
+            for i in range(n):
+                gx = max(bx0 - wx[i], 0.0, wx[i] - bx0 - res)
+                gy = max(by0 - wy[i], 0.0, wy[i] - by0 - res)
+                d = math.hypot(gx, gy)
+                if d < best:
+                    best = d
+            for corner in range(4):
+                cx = bx0 + res * (corner & 1)
+                cy = by0 + res * (corner >> 1)
+                j = n - 1
+                for i in range(n):
+                    d = _point_segment(cx, cy, wx[j], wy[j], wx[i], wy[i])
+                    if d < best:
+                        best = d
+                    j = i
+    return max(best, 0.0)
+
+
+@njit(cache=True)
+def _distances(blocked: np.ndarray, ox: float, oy: float, res: float, poses: np.ndarray,
+               px: np.ndarray, py: np.ndarray, reach_m: float) -> np.ndarray:
+    out = np.empty(poses.shape[0])
+    for k in range(poses.shape[0]):
+        out[k] = polygon_distance(blocked, ox, oy, res, poses[k, 0], poses[k, 1], poses[k, 2], px, py, reach_m)
+    return out
 
 
 @njit(cache=True)
@@ -180,40 +427,12 @@ def pose_margin_nb(
     return best
 
 
-def footprint_clearance(grid: OccupancyGrid, robot: RobotProfile, poses: np.ndarray) -> float:
-    """Smallest distance (m) between the footprint rectangle at any of ``poses`` (m, 3: x, y, yaw) and a
-    blocked cell (occupied or unknown) of the raw map; cells outside the map count as blocked. 0 when
-    they overlap. Exact for rectangle vs. square cells (closest features are a vertex and a side)."""
-    res = grid.resolution_m
-    blocked = grid.blocked()
-    centres = boundary_cell_centres(grid, edge_blocked=True)
-    tree = cKDTree(centres)
-    hl, hw = robot.footprint_length_m / 2, robot.footprint_width_m / 2
-    half_diag = math.hypot(hl, hw)
-    sq = np.array([[-1, -1], [1, -1], [1, 1], [-1, 1]]) * res / 2
-    rect = np.array([[-hl, -hw], [hl, -hw], [hl, hw], [-hl, hw]])
-    d0, _ = tree.query(poses[:, :2])
-    best = np.inf
-    for k in np.argsort(d0):
-        if d0[k] - half_diag - res > best:
-            break
-        x, y, th = poses[k]
-        ixc, iyc = grid.world_to_cell(x, y)
-        if not (0 <= ixc < grid.width and 0 <= iyc < grid.height) or blocked[iyc, ixc]:
-            return 0.0
-        cand = centres[tree.query_ball_point((x, y), d0[k] + half_diag + res)]
-        c, s = math.cos(th), math.sin(th)
-        # square corners in the body frame → distance to the rectangle box
-        corners = cand[:, None, :] + sq[None]
-        rel = corners - (x, y)
-        bx = rel[..., 0] * c + rel[..., 1] * s
-        by = -rel[..., 0] * s + rel[..., 1] * c
-        d_sq = np.hypot(np.maximum(np.abs(bx) - hl, 0), np.maximum(np.abs(by) - hw, 0)).min()
-        # rectangle corners in the world frame → distance to each square box
-        wc = np.stack([x + rect[:, 0] * c - rect[:, 1] * s, y + rect[:, 0] * s + rect[:, 1] * c], axis=1)
-        rr = np.abs(wc[None] - cand[:, None, :]) - res / 2
-        d_rc = np.hypot(np.maximum(rr[..., 0], 0), np.maximum(rr[..., 1], 0)).min()
-        best = min(best, float(d_sq), float(d_rc))
-        if best <= 0:
-            return 0.0
-    return float(best)
+def footprint_clearance(grid: OccupancyGrid, robot: RobotProfile, poses: np.ndarray, reach_m: float = 1.0) -> float:
+    """Smallest exact distance (m) between the robot's padded footprint polygon at any of ``poses`` (m, 3: x, y,
+    yaw) and a blocked cell (occupied or unknown) of the raw map or the map's edge; 0 when they meet; capped
+    at ``reach_m``."""
+    poly = robot.footprint_polygon
+    poses = np.ascontiguousarray(np.atleast_2d(np.asarray(poses, float))[:, :3])
+    dist = _distances(grid.blocked(), float(grid.origin[0]), float(grid.origin[1]), grid.resolution_m, poses,
+                      np.ascontiguousarray(poly[:, 0]), np.ascontiguousarray(poly[:, 1]), reach_m)
+    return float(dist.min()) if len(dist) else reach_m

@@ -69,7 +69,7 @@ def run(args: argparse.Namespace) -> int:
     try:
         result = execute_plan(request, grid, robot)
     except PlanningError as exc:
-        emit_json(failure_json(exc.code, exc.msg, robot), args.out)
+        emit_json(failure_json(exc.code, exc.msg, robot, exc.planning_time_s, exc.expansions), args.out)
         if args.plot:
             plot_plan(grid, robot, None, start, goal, args.plot, title=f"{grid.name}: no path ({exc.code})")
         if exc.code in BAD_ENDPOINT_CODES:

@@ -16,7 +16,7 @@ from planner.errors import (
     StartOccupied,
     StartOutsideMap,
 )
-from planner.hybrid_astar.search import HybridAStar, PlannerOptions
+from planner.hybrid_astar.search import CLEARANCE_REACH_M, HybridAStar, PlannerOptions
 from planner.occupancy import OccupancyGrid
 from planner.robot import load_robot
 from tests.pathcheck import check_path, footprint_distance
@@ -46,8 +46,10 @@ def test_paths_are_valid(planner, start, goal):
     result = planner.plan(start, goal)
     assert result.status == "exact" and result.error_code == 0
     assert check_path(planner.grid, planner.robot, result.states, start, goal) == []
-    # the reported clearance is a lower bound on the footprint's true distance to the obstacles
-    assert result.min_clearance_m <= footprint_distance(planner.grid, planner.robot, result.states) + 1e-9
+    # the reported clearance is the footprint polygon's true distance to the obstacles (the planner samples
+    # the path 4× finer than the returned states, so it may find a pose a little closer)
+    true = min(footprint_distance(planner.grid, planner.robot, result.states, reach_m=2.5), CLEARANCE_REACH_M)
+    assert true - 0.02 <= result.min_clearance_m <= true + 1e-9
     assert result.length_m >= math.hypot(goal[0] - start[0], goal[1] - start[1]) - 0.2
 
 

@@ -6,6 +6,7 @@ import math
 
 import numpy as np
 import pytest
+from matplotlib.path import Path
 
 from planner.maps.clearance import (
     CircleFootprint,
@@ -14,47 +15,86 @@ from planner.maps.clearance import (
     footprint_clearance,
 )
 from planner.occupancy import OccupancyGrid
-from planner.robot import load_robot
-from tests.pathcheck import footprint_hits
+from planner.robot import RobotProfile, load_robot, profile_from_dict
+from tests.pathcheck import footprint_distance, footprint_hits
 from tests.reconfigcheck import disc_hits
 
-ROBOT = load_robot("zju-60")
+
+def _box_robot(half_length: float, half_width: float, padding: float = 0.0) -> RobotProfile:
+    data = {"name": "box", "radius_m": 0.3, "max_roll_deg": 15, "max_roll_rate_deg_s": 30, "roll_time_constant_s": 0.1,
+            "max_speed_m_s": 0.5, "max_accel_m_s2": 0.5, "footprint_padding_m": padding,
+            "footprint": [[half_length, half_width], [-half_length, half_width], [-half_length, -half_width],
+                          [half_length, -half_width]]}
+    return profile_from_dict(data)
 
 
-def test_circles_cover_the_footprint_rectangle():
-    for name in ("zju-60", "zju-80", "daedalus"):
-        robot = load_robot(name)
-        for n in (1, 2, 3, 5):
-            fp = CircleFootprint.for_robot(robot, n)
-            rng = np.random.default_rng(n)
-            pts = rng.uniform(-0.5, 0.5, (2000, 2)) * [robot.footprint_length_m, robot.footprint_width_m]
-            d = np.hypot(pts[:, :1] - fp.offsets_x, pts[:, 1:] - fp.offsets_y).min(axis=1)
-            assert np.all(d <= fp.radius_m + 1e-12)
+def _inside(poly: np.ndarray, n: int, seed: int) -> np.ndarray:
+    rng = np.random.default_rng(seed)
+    lo, hi = poly.min(axis=0), poly.max(axis=0)
+    pts = rng.uniform(lo, hi, (n, 2))
+    return pts[Path(poly).contains_points(pts)]
 
 
-def test_more_circles_cover_less_redundant_area():
-    robot = load_robot("zju-60")
-    radii = [CircleFootprint.for_robot(robot, n).radius_m for n in (1, 2, 3, 4)]
+@pytest.mark.parametrize("robot", [load_robot("zju-60"), load_robot("zju-80"), load_robot("daedalus"),
+                                   _box_robot(0.6, 0.2, 0.02)], ids=["zju-60", "zju-80", "daedalus", "box"])
+def test_circles_cover_the_padded_polygon(robot: RobotProfile) -> None:
+    poly = robot.footprint_polygon
+    pts = np.vstack([_inside(poly, 4000, 1), poly])
+    for fp in [CircleFootprint.covering(poly, n) for n in (1, 2, 3, 5)] + [CircleFootprint.for_robot(robot)]:
+        d = np.hypot(pts[:, :1] - fp.offsets_x, pts[:, 1:] - fp.offsets_y).min(axis=1)
+        assert np.all(d <= fp.radius_m)
+
+
+def test_the_covering_overshooting_least_is_chosen():
+    # a round sphere is best covered by one circle, a long body by several along its length
+    assert len(CircleFootprint.for_robot(load_robot("zju-60")).offsets_x) == 1
+    long_body = _box_robot(0.6, 0.2)
+    fp = CircleFootprint.for_robot(long_body)
+    assert len(fp.offsets_x) == 3 and np.all(fp.offsets_y == 0)
+    assert fp.excess(long_body.footprint_polygon) < CircleFootprint.covering(long_body.footprint_polygon, 1).excess(
+        long_body.footprint_polygon)
+    radii = [CircleFootprint.covering(long_body.footprint_polygon, n).radius_m for n in (1, 2, 3, 4)]
     assert all(a > b for a, b in itertools.pairwise(radii))
 
 
-def test_clearance_margin_is_conservative_against_the_raw_grid():
-    """Where the circle check says free, the real footprint rectangle touches no blocked cell."""
-    rng = np.random.default_rng(11)
+def _random_world(seed: int) -> OccupancyGrid:
+    rng = np.random.default_rng(seed)
     occ = rng.random((120, 120)) < 0.01
     occ[40:60, 50:90] = True
-    grid = OccupancyGrid.from_occupied(occ, 0.05)
-    robot = load_robot("zju-60")
+    return OccupancyGrid.from_occupied(occ, 0.05)
+
+
+@pytest.mark.parametrize("robot", [load_robot("zju-60"), _box_robot(0.6, 0.2, 0.02)], ids=["zju-60", "box"])
+def test_two_tier_check_agrees_with_an_independent_polygon_test(robot: RobotProfile) -> None:
+    """Circles first, the polygon where they touch: free exactly where the real padded polygon touches nothing."""
+    grid = _random_world(11)
+    rng = np.random.default_rng(12)
     fp = CircleFootprint.for_robot(robot)
     clear = ClearanceMap(grid)
-    poses = np.column_stack([rng.uniform(0, 6, 3000), rng.uniform(0, 6, 3000), rng.uniform(-3.2, 3.2, 3000)])
-    margins = clear.pose_margin(fp, poses)
-    free = poses[margins >= 0]
-    assert len(free) > 20
-    for x, y, yaw in free:
-        assert not footprint_hits(grid, robot, x, y, yaw)
-    exact = clear.exact_pose_margin(fp, poses)
-    assert np.all(exact[np.isfinite(margins)] >= margins[np.isfinite(margins)] - 1e-9)
+    poses = np.column_stack([rng.uniform(0, 6, 1500), rng.uniform(0, 6, 1500), rng.uniform(-3.2, 3.2, 1500)])
+    margins = clear.footprint_margins(fp, robot.footprint_polygon, poses)
+    circles = clear.pose_margin(fp, poses)
+    assert np.all(margins[circles >= 0] == circles[circles >= 0])  # the cheap tier answers where it can
+    hits = np.array([footprint_hits(grid, robot, x, y, yaw) for x, y, yaw in poses])
+    assert 50 < hits.sum() < len(poses) - 50
+    assert np.array_equal(margins < 0, hits)
+    # the polygon fits in places the circles alone would refuse
+    assert np.sum((circles < 0) & ~hits) > 10
+
+
+def test_exact_footprint_distance_agrees_with_brute_force():
+    grid = _random_world(3)
+    robot = _box_robot(0.6, 0.2, 0.02)
+    rng = np.random.default_rng(4)
+    clear = ClearanceMap(grid)
+    poses = np.column_stack([rng.uniform(0.5, 5.5, 60), rng.uniform(0.5, 5.5, 60), rng.uniform(-3.2, 3.2, 60)])
+    fast = clear.footprint_distances(robot.footprint_polygon, poses, reach_m=1.0)
+    for pose, d in zip(poses, fast, strict=True):
+        assert d == pytest.approx(footprint_distance(grid, robot, pose[None], reach_m=1.0), abs=1e-9)
+    fp = CircleFootprint.for_robot(robot)
+    lower = clear.pose_margin(fp, poses)
+    assert np.all(lower <= fast + 1e-9)  # the circles' margin is a lower bound of the true distance
+    assert clear.min_footprint_distance(robot.footprint_polygon, poses, lower) == pytest.approx(fast.min(), abs=1e-12)
 
 
 def test_leaving_the_map_is_a_collision():
@@ -67,6 +107,7 @@ def test_leaving_the_map_is_a_collision():
 
 
 def test_footprint_clearance_against_a_wall() -> None:
+    ROBOT = _box_robot(0.3, 0.35)
     occ = np.zeros((80, 80), dtype=bool)
     occ[:, 60:] = True  # wall from x = 3.0 m
     grid = OccupancyGrid.from_occupied(occ, 0.05)
