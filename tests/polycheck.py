@@ -48,9 +48,9 @@ def brute_collides(grid: OccupancyGrid, poly: np.ndarray, pose: np.ndarray, allo
     if (pts[:, 0] < ox).any() or (pts[:, 0] > ox + w).any() or (pts[:, 1] < oy).any() or (pts[:, 1] > oy + h).any():
         return True
     res = grid.resolution_m
-    for iy, ix in zip(*np.nonzero(grid.blocked(allow_unknown)), strict=True):
-        if math.hypot(ox + (ix + 0.5) * res - pose[0], oy + (iy + 0.5) * res - pose[1]) > 1.0:
-            continue  # every footprint tested here lies within 0.6 m of its centre
+    iys, ixs = np.nonzero(grid.blocked(allow_unknown))
+    near = np.hypot(ox + (ixs + 0.5) * res - pose[0], oy + (iys + 0.5) * res - pose[1]) <= 1.0
+    for iy, ix in zip(iys[near], ixs[near], strict=True):  # every footprint tested lies within 0.6 m of its centre
         if clip_area(pts, ox + ix * res, oy + iy * res, ox + (ix + 1) * res, oy + (iy + 1) * res) > 1e-14:
             return True
     return False
