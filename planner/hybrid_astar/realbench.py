@@ -23,6 +23,7 @@ import logging
 import math
 import re
 import statistics
+import textwrap
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass, fields, replace
@@ -54,6 +55,7 @@ SPHEREPLAN = "sphereplan"
 BIT_DUBINS = "bitstar-dubins"
 BIT_REEDS_SHEPP = "bitstar-reeds-shepp"
 REFERENCE_SPACES = {BIT_DUBINS: "dubins", BIT_REEDS_SHEPP: "reeds-shepp"}
+SHORT_NAMES = {SPHEREPLAN: "sp", BIT_DUBINS: "D", BIT_REEDS_SHEPP: "RS"}
 BIG_MAP_CELLS = 1_000_000  # maps at least this large get the longer default time limit
 DEFAULT_TIME_LIMIT_S = 5.0
 DEFAULT_TIME_LIMIT_BIG_S = 10.0
@@ -538,6 +540,7 @@ def _summary(name: str, records: list[RunRecord], checker: PolygonChecker | None
 
 TABLE_COLUMNS = (
     ("map", "map"), ("cells", "cells"), ("limit s", "time limit given to each planner"),
+    ("setup s", "building sphereplan's planner for the map (once, not in the plan times)"),
     ("n", "problems"), ("disc", "proven unreachable (disconnected)"),
     ("BIT*D", "solved by BIT* on Dubins"), ("BIT*RS", "solved by BIT* on Reeds–Shepp"),
     ("BIT*", "solved by BIT* (either)"), ("sp", "solved by sphereplan"),
@@ -563,9 +566,9 @@ def format_real_table(summaries: Sequence[MapSummary]) -> str:
     rows = []
     for s in summaries:
         rows.append([
-            s.map, s.cells, _fmt(s.time_limit_s, 0), str(s.problems), str(s.disconnected), str(s.bit_dubins),
-            str(s.bit_reeds_shepp), str(s.bit_solved), str(s.sphereplan), str(s.missed), str(s.refused_free),
-            str(s.timeouts), str(s.bad_paths), _fmt(s.time_p50_s, 3), _fmt(s.time_p95_s, 3),
+            s.map, s.cells, _fmt(s.time_limit_s, 0), _fmt(s.setup_s, 2), str(s.problems), str(s.disconnected),
+            str(s.bit_dubins), str(s.bit_reeds_shepp), str(s.bit_solved), str(s.sphereplan), str(s.missed),
+            str(s.refused_free), str(s.timeouts), str(s.bad_paths), _fmt(s.time_p50_s, 3), _fmt(s.time_p95_s, 3),
             _fmt(s.both_sphereplan_p50_s, 3), _fmt(s.both_bit_first_p50_s, 3), str(s.unsolved),
             _fmt(s.unsolved_time_p50_s, 3), _fmt(s.length_ratio_median, 3), _fmt(s.length_ratio_max, 3),
             _fmt(s.clearance_median_m, 3), _fmt(s.reported_clearance_median_m, 3),
@@ -590,6 +593,27 @@ def write_real_csv(records: Sequence[RunRecord], path: str | Path) -> None:
             writer.writerow(asdict(r))
 
 
+def read_real_csv(path: str | Path) -> list[RunRecord]:
+    """The records of a CSV written by :func:`write_real_csv` (to re-plot or re-summarise a run)."""
+    types = {f.name: f.type for f in fields(RunRecord)}
+    out = []
+    with open(path, newline="") as fh:
+        for row in csv.DictReader(fh):
+            values: dict[str, Any] = {}
+            for key, text in row.items():
+                kind = types[key]
+                if kind == "bool":
+                    values[key] = text == "True"
+                elif kind == "int":
+                    values[key] = int(text)
+                elif kind == "float":
+                    values[key] = float(text)
+                else:
+                    values[key] = text
+            out.append(RunRecord(**values))
+    return out
+
+
 def plot_real(records: Sequence[RunRecord], summaries: Sequence[MapSummary], path: str | Path, title: str) -> None:
     """A PNG summary: outcomes per map and planner, time per problem (failures drawn at the time limit),
     length ÷ reference, and the true footprint clearance of each path."""
@@ -604,7 +628,7 @@ def plot_real(records: Sequence[RunRecord], summaries: Sequence[MapSummary], pat
     problems = list(dict.fromkeys((r.map, r.problem) for r in records))
     labels = [f"{m}#{i}" for m, i in problems]
     fig, axes = plt.subplots(4, 1, figsize=(max(10.0, 0.28 * len(problems) + 4), 15))
-    fig.suptitle(title)
+    fig.suptitle(textwrap.fill(title, 110), fontsize=10)
 
     ax = axes[0]  # outcomes
     outcomes = ("solved", "timeout", "no_path", "start_refused", "goal_refused", "error", "unsolved", "invalid")
@@ -624,13 +648,14 @@ def plot_real(records: Sequence[RunRecord], summaries: Sequence[MapSummary], pat
                    edgecolor=colours[planner], linewidth=1.5, label=outcome if k == 0 or outcome == "unsolved"
                    else None)
             bottom += counts
+        for j in range(len(maps)):  # name each bar: sp, D (BIT* Dubins), RS (BIT* Reeds–Shepp)
+            ax.text(j + k * width, bottom[j] + 0.1, SHORT_NAMES[planner], ha="center", va="bottom", fontsize=7)
     ax.set_xticks(np.arange(len(maps)) + 0.4 - width / 2)
-    ax.set_xticklabels([f"{m}\n({' | '.join(p.replace('bitstar-', 'BIT* ') for p in planners)})" for m in maps],
-                       fontsize=8)
+    ax.set_xticklabels(maps, fontsize=8)
     per_map = max(sum(1 for r in records if r.map == m and r.planner == planners[0]) for m in maps)
     ax.set_ylim(0, per_map * 1.45)
     ax.set_ylabel("problems")
-    ax.set_title("outcome per map and planner (bars left to right: " + ", ".join(planners) + ")")
+    ax.set_title("outcome per map and planner (sp = sphereplan, D = BIT* Dubins, RS = BIT* Reeds–Shepp)")
     handles, names = ax.get_legend_handles_labels()
     unique = dict(zip(names, handles, strict=True))
     ax.legend(unique.values(), unique.keys(), fontsize=7, ncol=8, loc="upper center")
@@ -685,7 +710,7 @@ def plot_real(records: Sequence[RunRecord], summaries: Sequence[MapSummary], pat
         a.set_xticklabels(labels, rotation=70, ha="right", fontsize=7)
         a.set_xlim(-0.7, len(problems) - 0.3)
         a.set_xlabel("problem (map#index)")
-    fig.tight_layout(rect=(0, 0, 1, 0.98))
+    fig.tight_layout(rect=(0, 0, 1, 0.97))
     fig.savefig(path, dpi=90)
     plt.close(fig)
 

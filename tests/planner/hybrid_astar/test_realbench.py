@@ -6,7 +6,7 @@ No timing assertions: the BIT* runs get small budgets and are judged only on wha
 from __future__ import annotations
 
 import math
-from dataclasses import replace
+from dataclasses import asdict, replace
 
 import numpy as np
 import pytest
@@ -22,9 +22,11 @@ from planner.hybrid_astar.realbench import (
     _record,
     densify,
     draw_problems,
+    read_real_csv,
     run_reference,
     summarise,
     with_reference_lengths,
+    write_real_csv,
 )
 from planner.maps.nav2 import load_map
 from planner.occupancy import OccupancyGrid
@@ -215,3 +217,16 @@ def test_refused_pose_that_truly_collides_is_not_counted_as_refused_free() -> No
     rec = replace(_record(p, SPHEREPLAN, "goal_refused", 0.001, 5.0), map="m")
     (s,) = summarise([rec], {"m": PolygonChecker.for_robot(grid, ROBOT)}, False, {}, {})
     assert s.refused_free == 0
+
+
+def test_csv_round_trip(tmp_path) -> None:
+    records = [_rec(0, SPHEREPLAN, "solved", 0.2, length=11.0, clear=0.3, reported=0.05),
+               _rec(0, BIT_DUBINS, "unsolved", 5.0, disconnected=True)]
+    records = with_reference_lengths(records, False)
+    write_real_csv(records, tmp_path / "r.csv")
+    back = read_real_csv(tmp_path / "r.csv")
+    for a, b in zip(records, back, strict=True):
+        for key, value in asdict(a).items():
+            other = getattr(b, key)
+            assert type(other) is type(value), key
+            assert (value == other) or (isinstance(value, float) and math.isnan(value) and math.isnan(other)), key
