@@ -2,6 +2,9 @@
 
 The folder is found by :func:`default_maps_dir` (``$SPHEREPLAN_MAPS``, else ``<repo>/maps`` next to the
 ``planner`` package); :func:`map_files` is the one name → file index the CLI and the service open maps by.
+Only the files directly in the folder are indexed and listed. Subfolders are skipped on purpose: ``maps/real``
+holds the Nav2 benchmark maps (up to 4 million cells, third-party, Apache-2.0), which are opened by path or
+listed with ``sphereplan maps --maps maps/real``, so the service never offers them by name.
 """
 
 from __future__ import annotations

@@ -1,18 +1,34 @@
-"""``sphereplan bench``: the planner against OMPL BIT*/RRT* on the shipped problems; prints a table."""
+"""``sphereplan bench``: the planner against OMPL BIT*/RRT* on the shipped problems; prints a table.
+
+``--suite real`` instead draws seeded random problems on Nav2's maps (``maps/real``) the way Nav2's planner
+benchmark does and compares sphereplan with OMPL BIT* on Dubins and Reeds–Shepp spaces
+(:mod:`planner.hybrid_astar.realbench`, docs/planning.md "The real-map benchmark").
+"""
 
 from __future__ import annotations
 
 import argparse
+import json
 import sys
+from typing import Any
 
 from planner.errors import InvalidInput
 from planner.hybrid_astar.bench import cold_start_s, format_table, plot_bench, run_bench, write_csv
+from planner.hybrid_astar.realbench import (
+    REAL_MAPS,
+    format_real_table,
+    plot_real,
+    resolve_map,
+    run_real_bench,
+    write_real_csv,
+)
+from planner.hybrid_astar.search import PlannerOptions
 from planner.maps.problems import list_problems
 from planner.robot import load_robot
-from service.cli._io import finite_float
+from service.cli._io import finite_float, positive_float
 
 VERB = "bench"
-HELP = "benchmark the Hybrid A* against OMPL BIT* and RRT* on the shipped problem sets"
+HELP = "benchmark the Hybrid A* against OMPL BIT* and RRT* on the shipped problem sets or on Nav2's maps"
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -22,15 +38,75 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--runs", type=int, default=5, help="timed runs per problem (after one warm-up)")
     parser.add_argument("--ompl-time", type=finite_float, default=10.0, help="BIT* budget, s (0 = skip)")
     parser.add_argument("--rrt-time", type=finite_float, default=2.0, help="RRT* budget, s (0 = skip)")
-    parser.add_argument("--csv", default="bench.csv")
-    parser.add_argument("--png", default="bench.png")
-    parser.add_argument("--suite", choices=("planning", "reconfigure", "mpc", "all"), default="planning",
-                        help="planning: Hybrid A* vs OMPL (default); reconfigure: Spherobot plan times; "
-                             "mpc: MPC step times of the tracker; all: every table")
+    parser.add_argument("--csv", default=None, help="CSV output (default bench.csv; bench_real.csv for --suite real)")
+    parser.add_argument("--png", default=None, help="PNG output (default bench.png; bench_real.png for --suite real)")
+    parser.add_argument("--suite", choices=("planning", "reconfigure", "mpc", "all", "real"), default="planning",
+                        help="planning: Hybrid A* vs OMPL on the shipped problems (default); reconfigure: Spherobot "
+                             "plan times; mpc: MPC step times of the tracker; all: those three; real: random "
+                             "problems on Nav2's maps against BIT* (minutes)")
+    real = parser.add_argument_group("--suite real")
+    real.add_argument("--real-maps", default=",".join(REAL_MAPS),
+                      help="comma-separated map names in maps/real or YAML paths (default: %(default)s)")
+    real.add_argument("--per-map", type=int, default=6, help="problems drawn per map (default 6)")
+    real.add_argument("--seed", type=int, default=0, help="seed of the problem draw (default 0)")
+    real.add_argument("--time-limit", type=positive_float, default=None,
+                      help="time limit per planner and problem, s (default: 10 s on maps of ≥ 1 M cells, else 5 s)")
+    real.add_argument("--options", default=None,
+                      help="JSON object of sphereplan planner options (default: the defaults), e.g. "
+                           "'{\"allow_reverse\": true}'")
+    real.add_argument("--no-reference", action="store_true", help="skip OMPL BIT* (no solvability reference)")
     parser.set_defaults(func=run)
 
 
+def _options(text: str | None) -> PlannerOptions:
+    if not text:
+        return PlannerOptions()
+    try:
+        data: Any = json.loads(text)
+    except json.JSONDecodeError as exc:
+        raise InvalidInput("--options", f"is not valid JSON: {exc}") from None
+    if not isinstance(data, dict):
+        raise InvalidInput("--options", "must be a JSON object")
+    return PlannerOptions.from_dict(data)
+
+
+def run_real(args: argparse.Namespace) -> int:
+    """``--suite real``: table on stdout, progress on stderr, CSV and PNG written."""
+    if args.per_map < 1:
+        raise InvalidInput("--per-map", "must be ≥ 1")
+    robot = load_robot(args.robot)
+    options = _options(args.options)
+    specs = [m.strip() for m in args.real_maps.split(",") if m.strip()]
+    if not specs:
+        raise InvalidInput("--real-maps", "names no map")
+    paths = [resolve_map(m) for m in specs]
+    from tqdm import tqdm
+
+    per_problem = 1 if args.no_reference else 3
+    with tqdm(total=len(paths) * args.per_map * per_problem, file=sys.stderr, desc="bench real") as bar:
+
+        def progress(msg: str) -> None:
+            bar.set_postfix_str(msg[:40])
+            bar.update(1)
+
+        result = run_real_bench(paths, robot, args.per_map, args.seed, time_limit_s=args.time_limit,
+                                options=options, reference=not args.no_reference, progress=progress)
+    limit = "default limits (10 s ≥ 1 M cells, else 5 s)" if args.time_limit is None else f"{args.time_limit:g} s"
+    title = (f"sphereplan bench --suite real: {robot.name}, {args.per_map} problems per map, seed {args.seed}, "
+             f"{limit}, {'reversing' if result.reverse_allowed else 'forward-only'} sphereplan")
+    print(title)
+    print(format_real_table(result.summaries))
+    csv_path = args.csv or "bench_real.csv"
+    png_path = args.png or "bench_real.png"
+    write_real_csv(result.records, csv_path)
+    plot_real(result.records, result.summaries, png_path, title)
+    print(f"wrote {csv_path} and {png_path}")
+    return 0
+
+
 def run(args: argparse.Namespace) -> int:
+    if args.suite == "real":
+        return run_real(args)
     if args.runs < 1:
         raise InvalidInput("--runs", "must be ≥ 1")
     if args.suite in ("reconfigure", "all"):
@@ -64,7 +140,8 @@ def run(args: argparse.Namespace) -> int:
     if garage is not None:
         print(f"\ncold start `sphereplan plan` on garage ({garage.name}): "
               f"{cold_start_s(garage.map_path, garage.start, garage.goal):.2f} s")
-    write_csv(rows, args.csv)
-    plot_bench(rows, args.png)
-    print(f"wrote {args.csv} and {args.png}")
+    csv_path, png_path = args.csv or "bench.csv", args.png or "bench.png"
+    write_csv(rows, csv_path)
+    plot_bench(rows, png_path)
+    print(f"wrote {csv_path} and {png_path}")
     return 0

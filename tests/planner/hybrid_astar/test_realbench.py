@@ -1,0 +1,232 @@
+"""The real-map benchmark: the problem sampler, the unreachability proof, the BIT* reference and the summary.
+
+No timing assertions: the BIT* runs get small budgets and are judged only on what they found.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, replace
+
+import numpy as np
+import pytest
+
+from planner.hybrid_astar.bench_polygon import PolygonChecker
+from planner.hybrid_astar.realbench import (
+    BIT_DUBINS,
+    BIT_REEDS_SHEPP,
+    SPHEREPLAN,
+    DrawSettings,
+    RealProblem,
+    RunRecord,
+    _record,
+    densify,
+    draw_problems,
+    read_real_csv,
+    run_reference,
+    summarise,
+    with_reference_lengths,
+    write_real_csv,
+)
+from planner.maps.nav2 import load_map
+from planner.occupancy import OccupancyGrid
+from planner.robot import load_robot
+from tests.polycheck import brute_collides
+
+ROBOT = load_robot("zju-60")
+SMOOTHERS = load_map("maps/real/smoothers_world.yaml")
+
+
+def _room(width_m: float = 12.0, height_m: float = 6.0, res: float = 0.05) -> np.ndarray:
+    """An empty occupancy array of this size (the map's edge is the only obstacle)."""
+    return np.zeros((round(height_m / res), round(width_m / res)), dtype=bool)
+
+
+def test_same_seed_same_problems_other_seed_others() -> None:
+    a = draw_problems(SMOOTHERS, ROBOT, 5, np.random.default_rng(11))
+    b = draw_problems(SMOOTHERS, ROBOT, 5, np.random.default_rng(11))
+    c = draw_problems(SMOOTHERS, ROBOT, 5, np.random.default_rng(12))
+    assert a == b
+    assert [p.start for p in a] != [p.start for p in c]
+    assert [p.index for p in a] == list(range(5)) and all(p.map_name == "smoothers_world" for p in a)
+
+
+def test_drawn_poses_are_free_for_the_padded_polygon_inside_the_border_and_far_apart() -> None:
+    settings = DrawSettings()
+    problems = draw_problems(SMOOTHERS, ROBOT, 12, np.random.default_rng(5), settings=settings)
+    poly = ROBOT.footprint_polygon
+    border_m = settings.border_cells(SMOOTHERS) * SMOOTHERS.resolution_m
+    min_d = settings.min_distance_m(SMOOTHERS)
+    assert min_d == pytest.approx(3.0)  # 15 m map: 0.2 × 15 m = 3 m, Nav2's own minimum
+    w, h = SMOOTHERS.size_m
+    for p in problems:
+        for pose in (p.start, p.goal):
+            assert not brute_collides(SMOOTHERS, poly, np.array(pose), False), p
+            assert border_m <= pose[0] <= w - border_m and border_m <= pose[1] <= h - border_m
+            assert -math.pi <= pose[2] < math.pi
+            # cell centres, like Nav2's cells (which it places at the corner; we use the centre)
+            assert (pose[0] / SMOOTHERS.resolution_m) % 1 == pytest.approx(0.5)
+        assert p.distance_m == pytest.approx(math.dist(p.start[:2], p.goal[:2]))
+        assert p.distance_m >= min_d
+    yaws = [p.start[2] for p in problems] + [p.goal[2] for p in problems]
+    assert max(yaws) - min(yaws) > math.pi  # spread over the circle, not a constant
+
+
+def test_min_distance_scales_with_the_map() -> None:
+    field = load_map("maps/real/100by100_20.yaml")
+    assert DrawSettings().min_distance_m(field) == pytest.approx(20.0)
+    assert DrawSettings().border_cells(field) == 100  # Nav2's side_buffer on this very map
+    problems = draw_problems(field, ROBOT, 3, np.random.default_rng(0))
+    assert all(p.distance_m >= 20.0 for p in problems)
+
+
+def test_unknown_cells_block_unless_allowed() -> None:
+    data = np.full((120, 200), -1, dtype=np.int8)
+    data[:, :40] = 0  # a free strip on the left; the rest unknown
+    grid = OccupancyGrid(data=data, resolution_m=0.05, name="unknown")
+    settings = DrawSettings(border_fraction=0.02, min_distance_floor_m=1.0, min_distance_fraction=0.0)
+    strict = draw_problems(grid, ROBOT, 4, np.random.default_rng(1), settings=settings)
+    assert all(p.start[0] < 2.0 and p.goal[0] < 2.0 for p in strict)
+    lax = draw_problems(grid, ROBOT, 8, np.random.default_rng(1), settings=settings, allow_unknown=True)
+    assert any(p.start[0] > 2.0 or p.goal[0] > 2.0 for p in lax)
+
+
+def test_a_map_with_no_room_for_the_robot_is_bad_input() -> None:
+    occ = _room(3.0, 3.0)
+    occ[::8, :] = True  # slats 0.35 m apart: no pose fits
+    grid = OccupancyGrid.from_occupied(occ, 0.05, name="slats")
+    from planner.errors import InvalidInput
+
+    with pytest.raises(InvalidInput, match="could not draw"):
+        draw_problems(grid, ROBOT, 1, np.random.default_rng(0),
+                      settings=DrawSettings(max_draws=2000, min_distance_floor_m=0.5))
+
+
+@pytest.mark.parametrize(("gap_m", "split"), [(0.40, True), (1.50, False)])
+def test_disconnected_only_when_the_inscribed_disc_cannot_pass(gap_m: float, split: bool) -> None:
+    occ = _room(12.0, 6.0)
+    occ[:, 118:122] = True  # a wall at x = 5.9–6.1 m ...
+    g0 = round((3.0 - gap_m / 2) / 0.05)
+    occ[g0:g0 + round(gap_m / 0.05), 118:122] = False  # ... with a gap in the middle
+    grid = OccupancyGrid.from_occupied(occ, 0.05, name="wall")
+    settings = DrawSettings(min_distance_floor_m=0.5, min_distance_fraction=0.0)
+    problems = draw_problems(grid, ROBOT, 30, np.random.default_rng(4), settings=settings)
+    across = [p for p in problems if (p.start[0] < 6.0) != (p.goal[0] < 6.0)]
+    same = [p for p in problems if (p.start[0] < 6.0) == (p.goal[0] < 6.0)]
+    assert across and same
+    assert all(p.disconnected == split for p in across)
+    assert not any(p.disconnected for p in same)
+
+
+def _problem(grid: OccupancyGrid, start: tuple[float, float, float], goal: tuple[float, float, float]) -> RealProblem:
+    return RealProblem(grid.name, 0, start, goal, math.dist(start[:2], goal[:2]), False)
+
+
+def test_reference_finds_the_straight_path_on_an_open_map() -> None:
+    grid = OccupancyGrid.from_occupied(_room(12.0, 2.0), 0.05, name="open")
+    checker = PolygonChecker.for_robot(grid, ROBOT)
+    problem = _problem(grid, (2.0, 1.0, 0.0), (10.0, 1.0, 0.0))
+    for planner in (BIT_DUBINS, BIT_REEDS_SHEPP):
+        rec = run_reference(problem, grid, ROBOT, checker, planner, 0.5)
+        assert rec.solved and rec.valid and rec.status == "solved"
+        assert rec.length_m == pytest.approx(8.0, abs=1e-6)  # the straight line is the optimum
+        assert rec.min_clearance_m == pytest.approx(1.0 - 0.37, abs=1e-6)  # 2 m corridor, padded half-width 0.37 m
+        assert not rec.reverses
+
+
+def test_reference_goes_around_a_block_and_a_sealed_goal_stays_unsolved() -> None:
+    occ = _room()
+    occ[40:80, 100:140] = True  # a 2 m block at x 5–7 m, y 2–4 m, on the straight line
+    grid = OccupancyGrid.from_occupied(occ, 0.05, name="block")
+    checker = PolygonChecker.for_robot(grid, ROBOT)
+    rec = run_reference(_problem(grid, (2.0, 3.0, 0.0), (10.0, 3.0, 0.0)), grid, ROBOT, checker, BIT_DUBINS, 1.5)
+    assert rec.solved and rec.valid
+    assert 8.5 < rec.length_m < 16.0 and rec.length_m <= rec.first_length_m
+    assert 0.0 < rec.min_clearance_m < 1.0
+
+    sealed = occ.copy()
+    sealed[10:110, 200:204] = True  # a box around the goal at x = 10–12 m
+    sealed[10:14, 200:] = True
+    sealed[106:110, 200:] = True
+    grid2 = OccupancyGrid.from_occupied(sealed, 0.05, name="sealed")
+    rec2 = run_reference(_problem(grid2, (2.0, 3.0, 0.0), (11.0, 3.0, 0.0)), grid2, ROBOT,
+                         PolygonChecker.for_robot(grid2, ROBOT), BIT_REEDS_SHEPP, 0.3)
+    assert rec2.status == "unsolved" and not rec2.solved and rec2.time_s == 0.3
+
+
+def test_densify_keeps_the_ends_and_the_spacing() -> None:
+    poses = np.array([[0.0, 0.0, 3.0], [1.0, 0.0, -3.0], [1.0, 0.05, -3.0]])
+    dense = densify(poses, 0.1)
+    assert np.allclose(dense[0], poses[0]) and np.allclose(dense[-1], poses[-1])
+    assert np.hypot(*np.diff(dense[:, :2], axis=0).T).max() <= 0.1 + 1e-12
+    assert len(dense) == 12
+    # the yaw turns the short way through ±π, never through 0
+    assert np.all(np.abs(dense[:, 2]) >= 3.0 - 1e-12)
+
+
+def _rec(problem: int, planner: str, status: str, time_s: float, *, length: float = math.nan,
+         clear: float = math.nan, valid: bool = True, disconnected: bool = False,
+         reported: float = math.nan) -> RunRecord:
+    p = RealProblem("m", problem, (1.0, 1.0, 0.0), (5.0, 1.0, 0.0), 4.0, disconnected)
+    return _record(p, planner, status, time_s, 5.0, valid=valid, first_length_m=length, length_m=length,
+                   min_clearance_m=clear, reported_clearance_m=reported)
+
+
+def test_summary_counts_and_medians() -> None:
+    records = [
+        # 0: everyone solves; sphereplan 10 % longer than the better (Reeds–Shepp) reference
+        _rec(0, SPHEREPLAN, "solved", 0.2, length=11.0, clear=0.3, reported=0.05),
+        _rec(0, BIT_DUBINS, "solved", 0.4, length=10.5),
+        _rec(0, BIT_REEDS_SHEPP, "solved", 0.6, length=10.0),
+        # 1: only Reeds–Shepp solves; sphereplan times out
+        _rec(1, SPHEREPLAN, "timeout", 5.0),
+        _rec(1, BIT_DUBINS, "unsolved", 5.0),
+        _rec(1, BIT_REEDS_SHEPP, "solved", 1.0, length=9.0),
+        # 2: a free goal refused
+        _rec(2, SPHEREPLAN, "goal_refused", 0.001),
+        _rec(2, BIT_DUBINS, "solved", 0.3, length=7.0),
+        _rec(2, BIT_REEDS_SHEPP, "solved", 0.2, length=7.0),
+        # 3: nobody solves, proven disconnected; sphereplan gives up after 0.5 s
+        _rec(3, SPHEREPLAN, "no_path", 0.5, disconnected=True),
+        _rec(3, BIT_DUBINS, "unsolved", 5.0, disconnected=True),
+        _rec(3, BIT_REEDS_SHEPP, "unsolved", 5.0, disconnected=True),
+        # 4: sphereplan's path fails the exact check
+        _rec(4, SPHEREPLAN, "solved", 0.1, length=5.0, valid=False),
+        _rec(4, BIT_DUBINS, "solved", 0.1, length=5.0),
+        _rec(4, BIT_REEDS_SHEPP, "solved", 0.1, length=5.0),
+    ]
+    grid = OccupancyGrid.from_occupied(_room(), 0.05, name="m")
+    checkers = {"m": PolygonChecker.for_robot(grid, ROBOT)}
+    for reverse, missed, ratio in ((False, 2, 11.0 / 10.5), (True, 3, 11.0 / 10.0)):
+        final = with_reference_lengths(records, reverse)
+        (s,) = summarise(final, checkers, reverse, {"m": 0.1}, {"m": "240×120"})
+        assert (s.problems, s.disconnected, s.bit_dubins, s.bit_reeds_shepp, s.bit_solved) == (5, 1, 3, 4, 4)
+        assert (s.sphereplan, s.missed, s.refused_free, s.timeouts, s.bad_paths) == (1, missed, 1, 1, 1)
+        assert s.time_p50_s == pytest.approx(0.2) and s.both_sphereplan_p50_s == pytest.approx(0.2)
+        assert s.both_bit_first_p50_s == pytest.approx(0.4)  # problem 0: the faster allowed reference (Dubins)
+        assert (s.unsolved, s.unsolved_time_p50_s) == (1, 0.5)
+        assert s.length_ratio_median == pytest.approx(ratio) and s.length_ratio_max == pytest.approx(ratio)
+        assert s.clearance_median_m == pytest.approx(0.3) and s.reported_clearance_median_m == pytest.approx(0.05)
+
+
+def test_refused_pose_that_truly_collides_is_not_counted_as_refused_free() -> None:
+    occ = _room()
+    occ[:, :30] = True  # a wall over x < 1.5 m: the goal at (1, 1) below is inside it
+    grid = OccupancyGrid.from_occupied(occ, 0.05, name="m")
+    p = RealProblem("m", 0, (5.0, 3.0, 0.0), (1.0, 1.0, 0.0), 4.5, False)
+    rec = replace(_record(p, SPHEREPLAN, "goal_refused", 0.001, 5.0), map="m")
+    (s,) = summarise([rec], {"m": PolygonChecker.for_robot(grid, ROBOT)}, False, {}, {})
+    assert s.refused_free == 0
+
+
+def test_csv_round_trip(tmp_path) -> None:
+    records = [_rec(0, SPHEREPLAN, "solved", 0.2, length=11.0, clear=0.3, reported=0.05),
+               _rec(0, BIT_DUBINS, "unsolved", 5.0, disconnected=True)]
+    records = with_reference_lengths(records, False)
+    write_real_csv(records, tmp_path / "r.csv")
+    back = read_real_csv(tmp_path / "r.csv")
+    for a, b in zip(records, back, strict=True):
+        for key, value in asdict(a).items():
+            other = getattr(b, key)
+            assert type(other) is type(value), key
+            assert (value == other) or (isinstance(value, float) and math.isnan(value) and math.isnan(other)), key

@@ -1,0 +1,81 @@
+"""``sphereplan bench --suite real``: on a small map with tiny budgets it writes the documented CSV, a PNG and
+a table, and exits 0; bad input exits 2."""
+
+from __future__ import annotations
+
+import csv
+import math
+from pathlib import Path
+
+import pytest
+
+from planner.hybrid_astar.realbench import CSV_COLUMNS, REAL_MAPS
+from service.cli import main
+
+DOCUMENTED_COLUMNS = (
+    "map", "problem", "start_x", "start_y", "start_yaw", "goal_x", "goal_y", "goal_yaw", "distance_m",
+    "disconnected", "planner", "status", "solved", "time_s", "time_limit_s", "first_length_m", "length_m",
+    "reference_length_m", "length_ratio", "min_clearance_m", "reported_clearance_m", "valid", "reverses",
+    "expansions", "message",
+)
+
+
+def test_documented_columns_are_the_csv_columns() -> None:
+    assert CSV_COLUMNS == DOCUMENTED_COLUMNS
+    doc = (Path(__file__).resolve().parents[2] / "docs" / "planning.md").read_text()
+    section = doc[doc.index("## The real-map benchmark"):]
+    for column in DOCUMENTED_COLUMNS:
+        assert f"`{column}`" in section, column
+    assert set(REAL_MAPS) == {"warehouse", "depot", "smoothers_world", "100by100_20"}
+
+
+def test_real_suite_on_a_small_map(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    out_csv, out_png = tmp_path / "real.csv", tmp_path / "real.png"
+    code = main(["bench", "--suite", "real", "--real-maps", "smoothers_world", "--per-map", "2", "--seed", "3",
+                 "--time-limit", "0.3", "--csv", str(out_csv), "--png", str(out_png)])
+    assert code == 0
+    captured = capsys.readouterr()
+    assert "smoothers_world" in captured.out and "BIT*RS" in captured.out and "missed" in captured.out
+    assert "bench real" in captured.err  # progress goes to stderr
+    with out_csv.open() as fh:
+        reader = csv.DictReader(fh)
+        assert tuple(reader.fieldnames or ()) == DOCUMENTED_COLUMNS
+        rows = list(reader)
+    assert len(rows) == 6
+    assert sorted((r["problem"], r["planner"]) for r in rows) == sorted(
+        (str(i), p) for i in range(2) for p in ("sphereplan", "bitstar-dubins", "bitstar-reeds-shepp"))
+    for r in rows:
+        assert r["map"] == "smoothers_world" and float(r["time_limit_s"]) == 0.3
+        assert math.dist((float(r["start_x"]), float(r["start_y"])), (float(r["goal_x"]), float(r["goal_y"]))) >= 3.0
+        assert r["solved"] in ("True", "False") and r["status"]
+        if r["solved"] == "True":
+            assert float(r["length_m"]) > 0 and float(r["min_clearance_m"]) >= 0
+    assert out_png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and out_png.stat().st_size > 20_000
+
+
+def test_real_suite_without_reference_and_with_options(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    out_csv = tmp_path / "real.csv"
+    code = main(["bench", "--suite", "real", "--real-maps", "smoothers_world", "--per-map", "1", "--time-limit",
+                 "0.2", "--no-reference", "--options", '{"allow_reverse": true}', "--csv", str(out_csv),
+                 "--png", str(tmp_path / "real.png")])
+    assert code == 0
+    assert "reversing sphereplan" in capsys.readouterr().out
+    with out_csv.open() as fh:
+        assert [r["planner"] for r in csv.DictReader(fh)] == ["sphereplan"]
+
+
+@pytest.mark.parametrize(("argv", "field"), [
+    (["--per-map", "0"], "--per-map"),
+    (["--real-maps", "atlantis"], "--real-maps"),
+    (["--real-maps", "nowhere/map.yaml"], "--real-maps"),
+    (["--options", "{not json"], "--options"),
+    (["--options", '{"warp": 9}'], "options.warp"),
+])
+def test_real_suite_bad_input_exits_2(argv: list[str], field: str, capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["bench", "--suite", "real", *argv]) == 2
+    assert field in capsys.readouterr().err
+
+
+def test_time_limit_must_be_positive(capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["bench", "--suite", "real", "--time-limit", "0"]) == 2
+    assert "--time-limit" in capsys.readouterr().err
