@@ -26,8 +26,8 @@ C_NODES, C_EXPANSIONS, C_SINCE_SHOT, C_RESULT, C_SHOT_SEGS = 0, 1, 2, 3, 4
 (P_OX, P_OY, P_RES, P_RC, P_HOX, P_HOY, P_HCELL, P_RHO, P_GX, P_GY, P_GYAW, P_TOL_XY, P_TOL_YAW, P_RADIUS,
  P_STEP, P_SPACING, P_NON_STRAIGHT, P_CHANGE, P_REVERSE, P_SWITCH, P_COST_PENALTY, P_PROX_RANGE, P_GREED,
  P_SHOT_RATIO, P_MAX_ROLL, P_USE_DUBINS, P_ALLOW_REVERSE, P_N_YAW, P_USE_RS, P_RS_CELL, P_RS_HALF,
- P_PREFERRED) = range(32)
-N_PARAMS = 32
+ P_PREFERRED, P_REACH) = range(33)
+N_PARAMS = 33
 MAX_SHOT_SEGS = 3
 
 
@@ -36,28 +36,41 @@ def _motion_margin(
     clear: np.ndarray, blocked: np.ndarray, p: np.ndarray, offx: np.ndarray, offy: np.ndarray, px: np.ndarray,
     py: np.ndarray, x: float, y: float, yaw: float, d_roll: float, curv: float, s: float, worst_so_far: float,
 ) -> float:
-    """Smallest footprint margin (m) along a roll change then an arc, sampled ≤ p[P_SPACING] apart (the
-    covering circles' margin, or 0 where only the exact polygon fits; negative = collision)."""
+    """Smallest footprint margin (m) along a roll change then an arc (the covering circles' margin, or 0 where
+    only the exact polygon fits; negative = collision).
+
+    Poses are sampled at most p[P_SPACING] apart, farther where there is room: with margin m > 0 the circles
+    stay clear while their centres move less than m, and a centre moves at most (1 + |κ|·reach) per metre
+    travelled (reach = the farthest circle centre from the robot's centre).
+    """
     ox, oy, res, r_c, radius, spacing = p[P_OX], p[P_OY], p[P_RES], p[P_RC], p[P_RADIUS], p[P_SPACING]
     worst = worst_so_far
     shift = abs(radius * d_roll)
-    n = int(math.ceil(shift / spacing))
-    for i in range(1, n + 1):
-        xs, ys = roll_shift(x, y, yaw, radius, d_roll * i / n)
+    t = 0.0
+    advance = spacing
+    while t < shift:
+        t = min(shift, t + advance)
+        xs, ys = roll_shift(x, y, yaw, radius, math.copysign(t / radius, d_roll))
         m = pose_margin_exact(clear, blocked, ox, oy, res, xs, ys, yaw, offx, offy, r_c, px, py)
         if m < worst:
             worst = m
             if worst < 0.0:
                 return worst
+        advance = max(spacing, m)
     x1, y1 = roll_shift(x, y, yaw, radius, d_roll)
-    n = int(math.ceil(abs(s) / spacing))
-    for i in range(1, n + 1):
-        xa, ya, ya2 = arc_step(x1, y1, yaw, curv, s * i / n)
+    length = abs(s)
+    factor = 1.0 + abs(curv) * p[P_REACH]
+    t = 0.0
+    advance = spacing
+    while t < length:
+        t = min(length, t + advance)
+        xa, ya, ya2 = arc_step(x1, y1, yaw, curv, math.copysign(t, s))
         m = pose_margin_exact(clear, blocked, ox, oy, res, xa, ya, ya2, offx, offy, r_c, px, py)
         if m < worst:
             worst = m
             if worst < 0.0:
                 return worst
+        advance = max(spacing, m / factor)
     return worst
 
 

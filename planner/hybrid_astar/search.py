@@ -310,6 +310,7 @@ class HybridAStar:
         # the proximity cost reaches at least as far as the room the robot would like to keep
         p[core.P_PROX_RANGE] = max(o.proximity_range_m, self.robot.preferred_clearance_m)
         p[core.P_PREFERRED] = self.robot.preferred_clearance_m
+        p[core.P_REACH] = float(np.hypot(self.footprint.offsets_x, self.footprint.offsets_y).max())
         p[core.P_GREED], p[core.P_SHOT_RATIO] = o.greed, o.analytic_ratio_m
         p[core.P_MAX_ROLL] = self.robot.max_roll_rad
         p[core.P_USE_DUBINS] = 0.0 if self.reverse else 1.0

@@ -31,7 +31,6 @@ from scipy.ndimage import distance_transform_edt
 from planner.occupancy import OccupancyGrid
 from planner.robot import RobotProfile
 
-
 SAMPLE_SPACING_M = 0.005  # spacing of the polygon samples the covering circles are sized on
 
 
