@@ -21,14 +21,14 @@ from planner.maps.clearance import pose_margin_exact
 RUNNING, FOUND, EXHAUSTED, FULL = 0, 1, 2, 3
 
 # counters[] slots
-C_NODES, C_EXPANSIONS, C_SINCE_SHOT, C_RESULT, C_SHOT_SEGS = 0, 1, 2, 3, 4
+C_NODES, C_EXPANSIONS, C_SINCE_SHOT, C_RESULT, C_SHOT_SEGS, C_BEST = 0, 1, 2, 3, 4, 5
 # params[] slots (float64)
 (P_OX, P_OY, P_RES, P_RC, P_HOX, P_HOY, P_HCELL, P_RHO, P_GX, P_GY, P_GYAW, P_TOL_XY, P_TOL_YAW, P_RADIUS,
  P_STEP, P_SPACING, P_NON_STRAIGHT, P_CHANGE, P_REVERSE, P_SWITCH, P_COST_PENALTY, P_PROX_RANGE, P_GREED,
  P_SHOT_RATIO, P_MAX_ROLL, P_USE_DUBINS, P_ALLOW_REVERSE, P_N_YAW, P_USE_RS, P_RS_CELL, P_RS_HALF,
- P_PREFERRED, P_REACH) = range(33)
-N_PARAMS = 33
-MAX_SHOT_SEGS = 3
+ P_PREFERRED, P_REACH, P_BEST_H) = range(34)
+N_PARAMS = 34
+MAX_SHOT_SEGS = 6  # a Dubins shot has 3 segments, a Reeds–Shepp shot up to 5
 
 
 @njit(cache=True)
@@ -164,20 +164,32 @@ def try_shot(
         return 0
     if shot_length(radius, roll, groll, seg_roll, seg_len, n) >= max_len:
         return 0
+    if shot_margin(clear, blocked, p, offx, offy, px, py, x, y, yaw, roll, seg_roll, seg_curv, seg_len, n, groll,
+                   min_margin) < min_margin:
+        return 0
+    return n
+
+
+@njit(cache=True)
+def shot_margin(
+    clear: np.ndarray, blocked: np.ndarray, p: np.ndarray, offx: np.ndarray, offy: np.ndarray, px: np.ndarray,
+    py: np.ndarray, x: float, y: float, yaw: float, roll: float, seg_roll: np.ndarray, seg_curv: np.ndarray,
+    seg_len: np.ndarray, n: int, groll: float, min_margin: float,
+) -> float:
+    """Smallest footprint margin along ``n`` motions (held roll, curvature, signed length) from (x, y, yaw,
+    roll), ending with the roll brought to ``groll``; stops early once it falls below ``min_margin``."""
+    radius = p[P_RADIUS]
     cx, cy, cyaw, croll = x, y, yaw, roll
     worst = math.inf
     for k in range(n):
         worst = _motion_margin(clear, blocked, p, offx, offy, px, py, cx, cy, cyaw, seg_roll[k] - croll,
                                seg_curv[k], seg_len[k], worst)
         if worst < min_margin:
-            return 0
+            return worst
         cx, cy = roll_shift(cx, cy, cyaw, radius, seg_roll[k] - croll)
         cx, cy, cyaw = arc_step(cx, cy, cyaw, seg_curv[k], seg_len[k])
         croll = seg_roll[k]
-    worst = _motion_margin(clear, blocked, p, offx, offy, px, py, cx, cy, cyaw, groll - croll, 0.0, 0.0, worst)
-    if worst < min_margin:
-        return 0
-    return n
+    return _motion_margin(clear, blocked, p, offx, offy, px, py, cx, cy, cyaw, groll - croll, 0.0, 0.0, worst)
 
 
 @njit(cache=True)
@@ -295,6 +307,9 @@ def search_chunk(
             return FOUND
         # 3. Analytic expansion every N expansions, N shrinking as the goal gets closer (Nav2's rule).
         h_here = _heuristic(htab, rs, p, x, y, yaw)
+        if h_here < p[P_BEST_H]:  # the driver tries Reeds–Shepp shots from the closest node between chunks
+            p[P_BEST_H] = h_here
+            counters[C_BEST] = k
         counters[C_SINCE_SHOT] += 1
         if counters[C_SINCE_SHOT] >= max(1, int(h_here / p[P_SHOT_RATIO])):
             counters[C_SINCE_SHOT] = 0

@@ -45,6 +45,7 @@ from planner.errors import (
 )
 from planner.hybrid_astar import core
 from planner.hybrid_astar.heuristics import HolonomicHeuristic, auto_downsample, coarse_cost_grid, reeds_shepp_table
+from planner.hybrid_astar.reeds_shepp import sphere_shot
 from planner.kinematics import child_pose, densify_motions, wrap
 from planner.maps.clearance import CircleFootprint, ClearanceMap, inscribed_radius
 from planner.occupancy import OccupancyGrid
@@ -183,6 +184,7 @@ class _Search:
         p = planner._params(goal)
         p[core.P_HOX], p[core.P_HOY] = heur.origin_xy
         p[core.P_HCELL] = heur.cell_m
+        p[core.P_BEST_H] = math.inf
         self.p = p
         grid = planner.grid
         n_keys = grid.width * grid.height * o.n_yaw_bins * planner.n_roll_bins
@@ -203,6 +205,29 @@ class _Search:
     @property
     def expansions(self) -> int:
         return int(self.counters[core.C_EXPANSIONS])
+
+    def reeds_shepp_shot(self, k: int) -> bool:
+        """Try a Reeds–Shepp shot from node ``k`` to the goal; on success record it as the result."""
+        pl, p = self.planner, self.p
+        x, y, yaw, roll = (float(v) for v in self.node_f[k, :4])
+        goal = (float(p[core.P_GX]), float(p[core.P_GY]), float(p[core.P_GYAW]))
+        motions = sphere_shot((x, y, yaw, roll), goal, pl.robot.min_turning_radius_m, pl.robot.max_roll_rad,
+                              pl.robot.radius_m)
+        if motions is None or len(motions) > core.MAX_SHOT_SEGS:
+            return False
+        n = len(motions)
+        seg = np.array(motions)
+        self.seg_roll[:n], self.seg_curv[:n], self.seg_len[:n] = seg[:, 0], seg[:, 1], seg[:, 2]
+        # like the compiled shots: keep the preferred clearance where both ends have it
+        keep = max(0.0, min(pl.robot.preferred_clearance_m, pl.pose_margin((x, y, yaw)), pl.pose_margin(goal)))
+        margin = core.shot_margin(pl.clearance.clearance, pl.clearance.blocked, p, pl.footprint.offsets_x,
+                                  pl.footprint.offsets_y, pl._px, pl._py, x, y, yaw, roll, self.seg_roll,
+                                  self.seg_curv, self.seg_len, n, 0.0, keep)
+        if margin < keep:
+            return False
+        self.counters[core.C_RESULT] = k
+        self.counters[core.C_SHOT_SEGS] = n
+        return True
 
     def step(self, budget: int) -> int:
         """Run up to ``budget`` expansions; returns the compiled loop's status (FULL is handled here)."""
@@ -361,7 +386,15 @@ class HybridAStar:
             )
         run = _Search(self, start, goal, heur, o)
         checked_goal = False
+        tried_from = -1
         while True:
+            # 3b. Reeds–Shepp analytic expansion (reversing robots), from the start and then from the node
+            #     closest to the goal by the heuristic whenever that changes, between compiled chunks.
+            best = int(run.counters[core.C_BEST])
+            if self.reverse and best != tried_from:
+                tried_from = best
+                if run.reeds_shepp_shot(best):
+                    break
             status = run.step(min(o.chunk_expansions, o.max_iterations - run.expansions))
             if status == core.FOUND:
                 break
