@@ -20,7 +20,6 @@ from __future__ import annotations
 
 import hashlib
 import io
-import json
 import logging
 import math
 import multiprocessing
@@ -34,7 +33,7 @@ from concurrent.futures import TimeoutError as FuturesTimeout
 from concurrent.futures.process import BrokenProcessPool
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Literal
+from typing import Any
 
 import numpy as np
 
@@ -44,8 +43,8 @@ from planner.maps.catalogue import default_maps_dir, list_maps
 from planner.maps.catalogue import map_files as map_index
 from planner.maps.nav2 import MESH_SUFFIXES
 from planner.occupancy import OccupancyGrid
-from planner.result import failure_json
 from planner.robot import DEFAULT_ROBOT, builtin_robots, load_robot
+from service.outcome import Outcome, ServiceBusy, error_outcome, ok_outcome, outcome_of_exception
 from service.pipeline import execute_plan
 from service.wire import (
     MAX_INLINE_CELLS,
@@ -61,12 +60,8 @@ from service.wire import (
 
 log = logging.getLogger(__name__)
 
-#: Nav2 ComputePathToPose UNKNOWN: the code of every error that is not a planning failure
-UNKNOWN_ERROR_CODE = 200
 #: farthest reconfiguration goal, in sphere radii from the start (paper 004's examples are a few radii)
 MAX_RECONFIGURE_RADII = 200
-
-Kind = Literal["ok", "bad_input", "not_found", "failed", "busy", "internal"]
 
 
 @dataclass(frozen=True)
@@ -109,66 +104,6 @@ class ServiceSettings:
     @property
     def in_flight_cap(self) -> int:
         return self.max_in_flight or 4 * self.workers
-
-
-@dataclass(frozen=True)
-class Outcome:
-    """The answer to one request: ``body`` is the JSON (UTF-8 bytes) every transport sends unchanged.
-
-    ``kind``: ``ok``; ``bad_input`` (HTTP 422); ``not_found`` (404); ``failed`` — planning ran and found
-    no path, body = the failed-result JSON with the Nav2 code (422); ``busy`` (503); ``internal`` (500).
-    """
-
-    kind: Kind
-    body: bytes
-    error_code: int = 0
-
-    @property
-    def ok(self) -> bool:
-        return self.kind == "ok"
-
-    def json(self) -> Any:
-        return json.loads(self.body)
-
-
-def _dumps(data: Any) -> bytes:
-    return json.dumps(data, allow_nan=False, separators=(",", ":")).encode()
-
-
-def error_outcome(kind: Kind, msg: str, field: str | None = None, code: int = UNKNOWN_ERROR_CODE) -> Outcome:
-    """An error answer: ``{error_code, error_msg, field}``."""
-    return Outcome(kind, _dumps({"error_code": code, "error_msg": msg, "field": field}), code)
-
-
-def outcome_of_exception(exc: BaseException, robot_json: Any = None, plan: bool = True) -> Outcome:
-    """Map a sphereplan error onto an :class:`Outcome` (the same mapping everywhere). A planning failure
-    of ``/v1/plan`` (``plan``) carries the failed plan-result JSON; of other capabilities
-    ``{status: failed, error_code, error_msg, field: null}``."""
-    if isinstance(exc, PlanningError):
-        if not plan:
-            body = {"status": "failed", "error_code": exc.code, "error_msg": exc.msg, "field": None}
-            return Outcome("failed", _dumps(body), exc.code)
-        body = failure_json(exc.code, exc.msg, None)
-        body["robot"] = robot_json
-        return Outcome("failed", _dumps(body), exc.code)
-    if isinstance(exc, NotFound):
-        return error_outcome("not_found", str(exc), exc.field)
-    if isinstance(exc, InvalidInput):
-        return error_outcome("bad_input", str(exc), exc.field)
-    if isinstance(exc, SpherePlanError):
-        return error_outcome("bad_input", str(exc))
-    return error_outcome("internal", f"internal error: {type(exc).__name__}: {exc}")
-
-
-class ServiceBusy(Exception):
-    """Too many jobs in flight; retry after ``retry_after_s`` seconds."""
-
-    def __init__(self, in_flight: int, retry_after_s: int) -> None:
-        super().__init__(f"the planner is busy ({in_flight} jobs in flight); retry in {retry_after_s} s")
-        self.retry_after_s = retry_after_s
-
-    def outcome(self) -> Outcome:
-        return error_outcome("busy", str(self))
 
 
 # ---------------------------------------------------------------------------------------- map catalogue
@@ -265,12 +200,12 @@ def plan_job(request: dict[str, Any], map_path: str | None) -> Outcome:
         grid = load_map_file(Path(map_path), request.get("robot")) if map_path is not None else inline_grid(
             request["map"])
         result = execute_plan(request, grid, robot)
-        return Outcome("ok", _dumps(result.to_json()))
+        return ok_outcome(result.to_json())
     except SpherePlanError as exc:
         return outcome_of_exception(exc, robot_json)
     except (ValueError, ArithmeticError) as exc:  # see _job
         log.warning("plan: computation failed for a request", exc_info=True)
-        return error_outcome("bad_input", f"the plan computation failed for this input: {type(exc).__name__}: {exc}")
+        return error_outcome(InvalidInput, f"the plan computation failed for this input: {type(exc).__name__}: {exc}")
     except Exception as exc:  # a bug, not the client's fault: log it and answer 500
         log.exception("plan job failed")
         return outcome_of_exception(exc)
@@ -299,12 +234,12 @@ def _job(name: str, compute: Callable[[], Any]) -> Outcome:
     traceback so the unchecked case can be turned into a named error in ``planner/``.
     """
     try:
-        return Outcome("ok", _dumps(compute()))
+        return ok_outcome(compute())
     except SpherePlanError as exc:
         return outcome_of_exception(exc, plan=False)
     except (ValueError, ArithmeticError) as exc:
         log.warning("%s: computation failed for a request", name, exc_info=True)
-        return error_outcome("bad_input", f"the {name} computation failed for this input: {type(exc).__name__}: {exc}")
+        return error_outcome(InvalidInput, f"the {name} computation failed for this input: {type(exc).__name__}: {exc}")
     except Exception as exc:
         log.exception("%s job failed", name)
         return outcome_of_exception(exc)
@@ -441,7 +376,7 @@ class PlanningService:
             with self._lock:
                 self._in_flight -= 1
             if job.cancelled():
-                outer.set_result(error_outcome("busy", "the service is shutting down"))
+                outer.set_result(error_outcome(ServiceBusy, "the service is shutting down"))
                 return
             exc = job.exception()
             if exc is None:
@@ -449,7 +384,7 @@ class PlanningService:
             elif isinstance(exc, BrokenProcessPool):
                 log.error("a worker process died: %s; restarting the pool", exc)
                 self._restart_pool(executor)
-                outer.set_result(error_outcome("internal", "a worker process died while planning"))
+                outer.set_result(error_outcome(BrokenProcessPool, "a worker process died while planning"))
             else:
                 outer.set_result(outcome_of_exception(exc))
 
@@ -557,11 +492,9 @@ class PlanningService:
         try:
             return self.submit_plan(request).result(timeout=timeout_s)
         except FuturesTimeout:
-            return error_outcome("busy", f"no answer within {timeout_s} s (the plan keeps its worker until its "
+            return error_outcome(ServiceBusy, f"no answer within {timeout_s} s (the plan keeps its worker until its "
                                  "own time limit ends)")
-        except ServiceBusy as exc:
-            return exc.outcome()
-        except SpherePlanError as exc:
+        except (ServiceBusy, SpherePlanError) as exc:
             return outcome_of_exception(exc)
 
     def maps(self) -> list[dict[str, Any]]:

@@ -32,8 +32,8 @@ from fastapi.responses import JSONResponse, Response
 from starlette.exceptions import HTTPException as StarletteHTTPException
 from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
-from planner.errors import InvalidInput, NotFound, SpherePlanError
-from service.core import UNKNOWN_ERROR_CODE, Outcome, PlanningService, ServiceBusy, ServiceSettings
+from service.core import PlanningService, ServiceSettings
+from service.outcome import ANSWERS, Outcome, error_body, outcome_of_exception
 from service.wire import (
     NAME_PATTERN,
     ErrorBody,
@@ -47,23 +47,23 @@ from service.wire import (
     TensegrityStaticRequest,
     VpipRodsRequest,
     VpipScheduleRequest,
-    describe_errors,
+    invalid_input,
 )
 
 log = logging.getLogger(__name__)
 
-STATUS = {"ok": 200, "bad_input": 422, "not_found": 404, "failed": 422, "busy": 503, "internal": 500}
 JSON = "application/json"
 
 
 def _error(status: int, msg: str, field: str | None = None, headers: dict[str, str] | None = None) -> JSONResponse:
-    return JSONResponse({"error_code": UNKNOWN_ERROR_CODE, "error_msg": msg, "field": field}, status, headers)
+    """An HTTP-level error (malformed body, unknown route, ...) with the service's error body."""
+    return JSONResponse(error_body(msg, field), status, headers)
 
 
 def outcome_response(outcome: Outcome, retry_after_s: int = 1) -> Response:
-    """An :class:`Outcome` as an HTTP response; the body bytes are sent as they are."""
+    """An :class:`Outcome` as an HTTP response with its row's status; the body bytes are sent as they are."""
     headers = {"Retry-After": str(retry_after_s)} if outcome.kind == "busy" else None
-    return Response(outcome.body, STATUS[outcome.kind], headers, media_type=JSON)
+    return Response(outcome.body, outcome.answer.http_status, headers, media_type=JSON)
 
 
 class BodyLimit:
@@ -259,35 +259,23 @@ def install_error_handlers(app: FastAPI) -> None:
         if not (content_type == JSON or content_type.endswith("+json")):
             return _error(415, f"Content-Type must be {JSON}, got {content_type!r}", "content-type")
         errors = list(exc.errors())
-        field, msg = describe_errors(errors)
+        error = invalid_input(errors)
         malformed = any(e.get("type") == "json_invalid" for e in errors)
-        return _error(400 if malformed else 422, msg, field)
+        return _error(400 if malformed else 422, str(error), error.field)
 
     @app.exception_handler(StarletteHTTPException)
     async def http_error(request: Request, exc: StarletteHTTPException) -> JSONResponse:
         return _error(exc.status_code, str(exc.detail), headers=getattr(exc, "headers", None))
 
-    @app.exception_handler(ServiceBusy)
-    async def busy(request: Request, exc: ServiceBusy) -> Response:
-        return outcome_response(exc.outcome(), exc.retry_after_s)
+    async def refused(request: Request, exc: Exception) -> Response:
+        outcome = outcome_of_exception(exc)
+        if outcome.kind == "internal":
+            log.error("unhandled error on %s %s", request.method, request.url.path, exc_info=exc)
+        return outcome_response(outcome, get_service(request).settings.retry_after_s)
 
-    @app.exception_handler(NotFound)
-    async def not_found(request: Request, exc: NotFound) -> JSONResponse:
-        return _error(404, str(exc), exc.field)
-
-    @app.exception_handler(InvalidInput)
-    async def bad_input(request: Request, exc: InvalidInput) -> JSONResponse:
-        return _error(422, str(exc), exc.field)
-
-    @app.exception_handler(SpherePlanError)
-    async def other(request: Request, exc: SpherePlanError) -> JSONResponse:
-        return _error(422, str(exc))
-
-    @app.exception_handler(Exception)
-    async def bug(request: Request, exc: Exception) -> JSONResponse:
-        log.exception("unhandled error on %s %s", request.method, request.url.path)
-        return JSONResponse({"error_code": UNKNOWN_ERROR_CODE, "error_msg": f"internal error: {type(exc).__name__}",
-                             "field": None}, 500)
+    # one handler for every row of the outcome table; the catch-all row is Starlette's last resort (Exception)
+    for error in ANSWERS:
+        app.add_exception_handler(error if issubclass(error, Exception) else Exception, refused)
 
 
 def create_app(settings: ServiceSettings | None = None, service: PlanningService | None = None) -> FastAPI:

@@ -19,6 +19,8 @@ from typing import Annotated, Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 
+from planner.errors import InvalidInput
+
 #: largest inline grid accepted by ``POST /v1/plan`` (cells); also capped by the HTTP body limit
 MAX_INLINE_CELLS = 250_000
 #: largest time limit a request may ask for (s); a server may set a lower one
@@ -309,8 +311,8 @@ def field_name(loc: Sequence[int | str]) -> str:
     return out or "body"
 
 
-def describe_errors(errors: Sequence[Any]) -> tuple[str, str]:
-    """(field, sentence) for a list of pydantic error dicts: the most specific error first.
+def invalid_input(errors: Sequence[Any]) -> InvalidInput:
+    """The :class:`InvalidInput` a list of pydantic error dicts amounts to: the most specific error first.
 
     Errors saying "wrong type" for one branch of a union are only reported when nothing more specific
     was found (``map: "../x"`` reports the name pattern, not "should be an object").
@@ -320,8 +322,8 @@ def describe_errors(errors: Sequence[Any]) -> tuple[str, str]:
     if first.get("type") == "json_invalid":
         loc = first.get("loc", ())
         where = f" at character {loc[-1]}" if loc and isinstance(loc[-1], int) else ""
-        return "body", f"body: malformed JSON{where}: {(first.get('ctx') or {}).get('error', first.get('msg'))}"
+        return InvalidInput("body", f"malformed JSON{where}: {(first.get('ctx') or {}).get('error', first.get('msg'))}")
     field = field_name(first.get("loc", ()))
     msg = str(first.get("msg", "invalid value"))
     others = len({f for f in (field_name(e.get("loc", ())) for e in errors) if not field.startswith(f)})
-    return field, f"{field}: {msg}" + (f" (and {others} more field(s))" if others else "")
+    return InvalidInput(field, msg + (f" (and {others} more field(s))" if others else ""))

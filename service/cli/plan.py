@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import sys
 from pathlib import Path
 from typing import Any
 
@@ -14,14 +13,12 @@ from planner.hybrid_astar.search import PlannerOptions
 from planner.maps.load import load_any
 from planner.result import failure_json
 from planner.robot import load_robot
-from service.cli import EXIT_BAD_INPUT, EXIT_NO_SOLUTION, EXIT_OK, EXIT_TIMEOUT
 from service.cli._io import emit_json, finite_float, positive_float
+from service.outcome import EXIT_OK
 from service.pipeline import execute_plan, pose_of
 
 VERB = "plan"
 HELP = "plan a path the sphere can roll from START to GOAL on a map"
-# start/goal outside the map or in collision: the caller's input is unusable (exit 2, like HTTP 400)
-BAD_ENDPOINT_CODES = (203, 204, 205, 206)
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -68,15 +65,11 @@ def run(args: argparse.Namespace) -> int:
     start, goal = pose_of(request["start"]), pose_of(request["goal"])
     try:
         result = execute_plan(request, grid, robot)
-    except PlanningError as exc:
+    except PlanningError as exc:  # the failed result is printed too; the exit code is the error's (service.outcome)
         emit_json(failure_json(exc.code, exc.msg, robot), args.out)
         if args.plot:
             plot_plan(grid, robot, None, start, goal, args.plot, title=f"{grid.name}: no path ({exc.code})")
-        if exc.code in BAD_ENDPOINT_CODES:
-            sys.stderr.write(f"sphereplan plan: error: {exc.msg}\n")
-            return EXIT_BAD_INPUT
-        sys.stderr.write(f"sphereplan plan: {'timeout' if exc.code == 207 else 'no path'}: {exc.msg}\n")
-        return EXIT_TIMEOUT if exc.code == 207 else EXIT_NO_SOLUTION
+        raise
     emit_json(result.to_json(), args.out)
     if args.plot:
         plot_plan(grid, robot, result.states, start, goal, args.plot,

@@ -16,16 +16,14 @@ from pydantic import ValidationError
 from planner.errors import GoalOccupied, InvalidInput, NotFound, PlannerTimedOut
 from planner.occupancy import OccupancyGrid
 from service.core import (
-    Outcome,
     PlanningService,
-    ServiceBusy,
     ServiceSettings,
     grid_png,
     inline_grid,
     map_index,
-    outcome_of_exception,
 )
-from service.wire import PlanRequest, describe_errors, field_name
+from service.outcome import ServiceBusy, ok_outcome, outcome_of_exception
+from service.wire import PlanRequest, field_name, invalid_input
 from tests.service import service_harness as harness
 from tests.service.service_harness import plan_body, strip_timing
 
@@ -51,7 +49,7 @@ class NeverDone(Executor):
 
     def finish_all(self) -> None:
         for future in self.futures:
-            future.set_result(Outcome("ok", b"{}"))
+            future.set_result(ok_outcome({}))
 
 
 def test_settings_are_validated_by_field(tmp_path: Path) -> None:
@@ -109,8 +107,8 @@ def test_field_names_of_validation_errors() -> None:
     assert field_name(("options", "greed", "bool")) == "options.greed"
     with pytest.raises(ValidationError) as err:
         PlanRequest.model_validate({**plan_body(), "map": "../x"})
-    field, msg = describe_errors(err.value.errors())
-    assert field == "map" and "pattern" in msg  # the name rule, not "should be an object"
+    error = invalid_input(err.value.errors())
+    assert error.field == "map" and "pattern" in str(error)  # the name rule, not "should be an object"
 
 
 def test_in_flight_cap_gives_busy_and_frees_on_completion(maps_dir: Path) -> None:
@@ -131,7 +129,7 @@ def test_in_flight_cap_gives_busy_and_frees_on_completion(maps_dir: Path) -> Non
     assert service.in_flight == 2
     with pytest.raises(ServiceBusy) as err:
         service.submit_plan(request)
-    assert err.value.outcome().kind == "busy" and err.value.retry_after_s == 1
+    assert outcome_of_exception(err.value).kind == "busy" and err.value.retry_after_s == 1
     assert service.plan(request).kind == "busy"
     executors[0].finish_all()
     assert [p.result(timeout=1).kind for p in pending] == ["ok", "ok"]
