@@ -18,37 +18,38 @@ planners per (map, robot, options), so repeated queries on a map skip the distan
 
 from __future__ import annotations
 
-import hashlib
-import io
 import logging
 import math
 import multiprocessing
-import os
 import threading
 import time
-from collections import OrderedDict
 from collections.abc import Callable
 from concurrent.futures import Executor, Future, ProcessPoolExecutor
 from concurrent.futures import TimeoutError as FuturesTimeout
 from concurrent.futures.process import BrokenProcessPool
-from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
-from planner.errors import InvalidInput, NotFound, PlanningError, SpherePlanError
+from planner.errors import InvalidInput, NotFound, SpherePlanError
 from planner.hybrid_astar.search import PlannerOptions
-from planner.maps.catalogue import default_maps_dir, list_maps
-from planner.maps.catalogue import map_files as map_index
+from planner.maps.catalogue import default_maps_dir, list_maps, map_files
 from planner.maps.nav2 import MESH_SUFFIXES
 from planner.occupancy import OccupancyGrid
 from planner.robot import DEFAULT_ROBOT, builtin_robots, load_robot
-from service.outcome import Outcome, ServiceBusy, error_outcome, ok_outcome, outcome_of_exception
-from service.pipeline import execute_plan
+from service.grids import grid_png, load_map_file
+from service.jobs import (
+    plan_job,
+    reconfigure_job,
+    simulate_job,
+    tensegrity_static_job,
+    vpip_rods_job,
+    vpip_schedule_job,
+    warm_up_job,
+    worker_init,
+)
+from service.outcome import Outcome, ServiceBusy, error_outcome, outcome_of_exception
+from service.settings import ServiceSettings
 from service.wire import (
-    MAX_INLINE_CELLS,
-    MAX_TIME_LIMIT_S,
     PlanIn,
     PlanRequest,
     ReconfigureRequest,
@@ -62,233 +63,6 @@ log = logging.getLogger(__name__)
 
 #: farthest reconfiguration goal, in sphere radii from the start (paper 004's examples are a few radii)
 MAX_RECONFIGURE_RADII = 200
-
-
-@dataclass(frozen=True)
-class ServiceSettings:
-    """Everything the service, the HTTP app and the Zenoh node are configured with, validated once.
-
-    ``maps_dir`` None means the shipped maps (:func:`planner.maps.catalogue.default_maps_dir`).
-    ``max_in_flight`` 0 means 4 jobs per worker. ``zenoh_listen`` is the default peer's only endpoint
-    (ignored when ``zenoh_config`` names a Zenoh config file). ``max_body_bytes`` bounds HTTP bodies.
-    """
-
-    maps_dir: Path | None = None
-    workers: int = 2
-    max_in_flight: int = 0
-    max_time_limit_s: float = MAX_TIME_LIMIT_S
-    max_inline_cells: int = MAX_INLINE_CELLS
-    max_body_bytes: int = 4_000_000
-    retry_after_s: int = 1
-    warm_up: bool = True
-    zenoh: bool = True
-    zenoh_config: Path | None = None
-    zenoh_listen: str = "tcp/127.0.0.1:7447"
-
-    def __post_init__(self) -> None:
-        def need(ok: bool, name: str, msg: str) -> None:
-            if not ok:
-                raise InvalidInput(name, msg)
-
-        need(1 <= self.workers <= 64, "workers", f"must be in [1, 64], got {self.workers}")
-        need(self.max_in_flight >= 0, "max_in_flight", f"must be ≥ 0 (0 = 4 per worker), got {self.max_in_flight}")
-        need(math.isfinite(self.max_time_limit_s) and 0 < self.max_time_limit_s <= MAX_TIME_LIMIT_S,
-             "max_time_limit_s", f"must be in (0, {MAX_TIME_LIMIT_S:g}], got {self.max_time_limit_s}")
-        need(1 <= self.max_inline_cells <= MAX_INLINE_CELLS, "max_inline_cells",
-             f"must be in [1, {MAX_INLINE_CELLS}], got {self.max_inline_cells}")
-        need(self.max_body_bytes >= 1024, "max_body_bytes", f"must be ≥ 1024, got {self.max_body_bytes}")
-        need(self.retry_after_s >= 1, "retry_after_s", f"must be ≥ 1, got {self.retry_after_s}")
-        if self.zenoh_config is not None:
-            need(Path(self.zenoh_config).is_file(), "zenoh_config", f"{self.zenoh_config} is not a file")
-
-    @property
-    def in_flight_cap(self) -> int:
-        return self.max_in_flight or 4 * self.workers
-
-
-# ---------------------------------------------------------------------------------------- map catalogue
-
-
-_GRIDS: OrderedDict[tuple[Any, ...], OccupancyGrid] = OrderedDict()
-_GRID_CACHE_SIZE = 8
-_GRID_LOCK = threading.Lock()
-
-
-def _cached(key: tuple[Any, ...], make: Callable[[], OccupancyGrid]) -> OccupancyGrid:
-    with _GRID_LOCK:
-        grid = _GRIDS.get(key)
-        if grid is not None:
-            _GRIDS.move_to_end(key)
-            return grid
-    grid = make()
-    with _GRID_LOCK:
-        _GRIDS[key] = grid
-        while len(_GRIDS) > _GRID_CACHE_SIZE:
-            _GRIDS.popitem(last=False)
-    return grid
-
-
-def load_map_file(path: Path, robot_name: str | None) -> OccupancyGrid:
-    """A map file as a grid, cached per (file, modification time[, robot for meshes])."""
-    from planner.maps.load import load_any
-
-    stat = path.stat()
-    mesh = path.suffix.lower() in MESH_SUFFIXES
-    key = ("file", str(path), stat.st_mtime_ns, stat.st_size, robot_name if mesh else None)
-    return _cached(key, lambda: load_any(path, load_robot(robot_name) if mesh else None))
-
-
-def inline_grid(spec: dict[str, Any]) -> OccupancyGrid:
-    """An :class:`OccupancyGrid` from the inline-grid JSON of :class:`service.wire.InlineGrid` (cached
-    by content, so repeated inline requests reuse the planner built for it)."""
-    data = np.asarray(spec["data"], dtype=np.int8)
-    origin = tuple(float(v) for v in spec["origin"])
-    digest = hashlib.sha1(data.tobytes()).hexdigest()
-    key = ("inline", digest, data.shape, float(spec["resolution_m"]), origin, spec["name"])
-    return _cached(key, lambda: OccupancyGrid(data=data, resolution_m=float(spec["resolution_m"]),
-                                              origin=origin, name=str(spec["name"])))  # type: ignore[arg-type]
-
-
-def grid_png(grid: OccupancyGrid) -> bytes:
-    """The grid as a greyscale PNG the way map_server images look: free white, occupied black,
-    unknown grey, image row 0 at the top."""
-    from PIL import Image
-
-    data = grid.data
-    pixels = np.where(data < 0, 205, 254 - (np.clip(data, 0, 100).astype(np.int32) * 254) // 100).astype(np.uint8)
-    buf = io.BytesIO()
-    Image.fromarray(pixels[::-1], mode="L").save(buf, format="PNG")
-    return buf.getvalue()
-
-
-# ------------------------------------------------------------------------------------- worker side
-
-
-def _worker_init() -> None:
-    """Runs once in each worker process: import the planner (and its compiled code) up front."""
-    logging.basicConfig(level=logging.WARNING, format="%(levelname)s worker %(process)d %(message)s")
-    import planner.hybrid_astar.plan  # noqa: F401
-
-
-def warm_up_job() -> int:
-    """Plan once on a small synthetic map so that compiled code is loaded before the first request."""
-    from planner.hybrid_astar.plan import plan_path
-
-    occupied = np.zeros((50, 80), dtype=bool)
-    occupied[[0, -1], :] = True
-    occupied[:, [0, -1]] = True
-    occupied[:15, 40] = True
-    grid = OccupancyGrid.from_occupied(occupied, 0.1, name="warm-up")
-    robot = load_robot(None)
-    try:
-        plan_path(grid, robot, (1.5, 1.0, 0.0), (6.5, 1.0, 0.0), time_limit_s=MAX_TIME_LIMIT_S)
-    except PlanningError as exc:  # still warm: the compiled code ran
-        log.warning("warm-up plan failed: %s", exc)
-    return os.getpid()
-
-
-def plan_job(request: dict[str, Any], map_path: str | None) -> Outcome:
-    """Run one plan request (the JSON of a validated :class:`PlanRequest`) in a worker process.
-
-    The same pipeline as ``sphereplan plan``: load the robot and the map, then
-    :func:`service.pipeline.execute_plan`.
-    """
-    robot_json = None
-    try:
-        robot = load_robot(request.get("robot"))
-        robot_json = robot.to_json()
-        grid = load_map_file(Path(map_path), request.get("robot")) if map_path is not None else inline_grid(
-            request["map"])
-        result = execute_plan(request, grid, robot)
-        return ok_outcome(result.to_json())
-    except SpherePlanError as exc:
-        return outcome_of_exception(exc, robot_json)
-    except (ValueError, ArithmeticError) as exc:  # see _job
-        log.warning("plan: computation failed for a request", exc_info=True)
-        return error_outcome(InvalidInput, f"the plan computation failed for this input: {type(exc).__name__}: {exc}")
-    except Exception as exc:  # a bug, not the client's fault: log it and answer 500
-        log.exception("plan job failed")
-        return outcome_of_exception(exc)
-
-
-def simulate_job(request: dict[str, Any], map_path: str | None, robot_name: str) -> Outcome:
-    """Run one simulate request in a worker: ``simulate_plan`` with the options of ``sphereplan simulate``."""
-    from planner.closed_loop.simulate import SimulationOptions, simulate_plan
-    from planner.closed_loop.tracker import MPCParams
-
-    def compute() -> dict[str, Any]:
-        grid = load_map_file(Path(map_path), None) if map_path is not None else inline_grid(request["map"])
-        options = SimulationOptions(control_rate_hz=request["rate_hz"], tracker=request["tracker"],
-                                    mpc=MPCParams(horizon=request["horizon"]), time_limit_s=request["time_limit_s"])
-        return simulate_plan(grid, request["path"], load_robot(robot_name), seed=request["seed"],
-                             noise=request["noise"], options=options)
-
-    return _job("simulate", compute)
-
-
-def _job(name: str, compute: Callable[[], Any]) -> Outcome:
-    """Run one capability's computation: its JSON, or the error outcome.
-
-    A ``ValueError``/``ArithmeticError`` that is not a sphereplan error means the request's numbers took
-    the computation outside its domain (or produced NaN): answered as bad input (422), logged with the
-    traceback so the unchecked case can be turned into a named error in ``planner/``.
-    """
-    try:
-        return ok_outcome(compute())
-    except SpherePlanError as exc:
-        return outcome_of_exception(exc, plan=False)
-    except (ValueError, ArithmeticError) as exc:
-        log.warning("%s: computation failed for a request", name, exc_info=True)
-        return error_outcome(InvalidInput, f"the {name} computation failed for this input: {type(exc).__name__}: {exc}")
-    except Exception as exc:
-        log.exception("%s job failed", name)
-        return outcome_of_exception(exc)
-
-
-def _radians(request: dict[str, Any], key: str) -> float:
-    return math.radians(request[key]) if request["degrees"] else float(request[key])
-
-
-def tensegrity_static_job(request: dict[str, Any]) -> Outcome:
-    """``static_equilibria`` in a worker (what ``sphereplan tensegrity static`` prints)."""
-    from planner.tensegrity import static_equilibria
-
-    return _job("tensegrity", lambda: static_equilibria(
-        _radians(request, "theta1"), _radians(request, "theta2"), load_robot(request["robot"]), request["verify"]))
-
-
-def reconfigure_job(request: dict[str, Any], map_path: str | None) -> Outcome:
-    """``plan_reconfiguration`` in a worker (what ``sphereplan reconfigure`` prints)."""
-    from planner.spherobot.reconfigure import plan_reconfiguration
-
-    def compute() -> dict[str, Any]:
-        grid = None
-        if map_path is not None:
-            grid = load_map_file(Path(map_path), None)
-        elif request["map"] is not None:
-            grid = inline_grid(request["map"])
-        return plan_reconfiguration({k: v for k, v in request.items() if k != "map"}, grid=grid)
-
-    return _job("reconfigure", compute)
-
-
-def vpip_rods_job(request: dict[str, Any]) -> Outcome:
-    """``rods_report`` in a worker (what ``sphereplan vpip rods`` prints)."""
-    from planner.vpip.api import rods_report
-
-    return _job("vpip rods", lambda: rods_report(
-        _radians(request, "phi_vpip"), _radians(request, "theta_vpip"), _radians(request, "roll"),
-        _radians(request, "pitch_phase"), request["robot"]))
-
-
-def vpip_schedule_job(request: dict[str, Any], robot_name: str) -> Outcome:
-    """``schedule_report`` in a worker (the series ``sphereplan vpip schedule --out`` writes)."""
-    from planner.vpip.api import schedule_report
-
-    return _job("vpip schedule", lambda: schedule_report(request["path"], robot_name, request["driver"]))
-
-
-# ------------------------------------------------------------------------------------------ service
 
 
 class PlanningService:
@@ -317,7 +91,7 @@ class PlanningService:
     def _process_pool(workers: int) -> Executor:
         # spawn, not fork: the parent runs threads (Zenoh, the event loop) that fork would copy mid-flight
         return ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("spawn"),
-                                   initializer=_worker_init)
+                                   initializer=worker_init)
 
     def start(self) -> None:
         """Open the pool and, if ``settings.warm_up``, run one warm-up job per worker (blocking)."""
@@ -407,7 +181,7 @@ class PlanningService:
 
     def resolve_map(self, name: str) -> Path:
         """The file of map ``name`` in the maps folder, or :class:`NotFound`."""
-        index = map_index(self.maps_dir)
+        index = map_files(self.maps_dir)
         path = index.get(name)
         if path is None:
             shown = ", ".join(sorted(index)) or "none"
@@ -500,7 +274,7 @@ class PlanningService:
     def maps(self) -> list[dict[str, Any]]:
         """Every map a request may name (:func:`planner.maps.catalogue.list_maps` entries: name, file, kind, size_m,
         resolution_m); where a grid YAML and a mesh share a name, the YAML is the one served."""
-        index = map_index(self.maps_dir)
+        index = map_files(self.maps_dir)
         return [entry for entry in list_maps(self.maps_dir) if index.get(entry["name"], Path()).name == entry["file"]]
 
     def map_grid(self, name: str) -> OccupancyGrid:

@@ -32,8 +32,9 @@ from fastapi.responses import JSONResponse, Response
 from starlette.exceptions import HTTPException as StarletteHTTPException
 from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
-from service.core import PlanningService, ServiceSettings
+from service.core import PlanningService
 from service.outcome import ANSWERS, Outcome, error_body, outcome_of_exception
+from service.settings import ServiceSettings
 from service.wire import (
     NAME_PATTERN,
     ErrorBody,

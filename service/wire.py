@@ -20,11 +20,7 @@ from typing import Annotated, Any, Literal
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 
 from planner.errors import InvalidInput
-
-#: largest inline grid accepted by ``POST /v1/plan`` (cells); also capped by the HTTP body limit
-MAX_INLINE_CELLS = 250_000
-#: largest time limit a request may ask for (s); a server may set a lower one
-MAX_TIME_LIMIT_S = 60.0
+from service.settings import MAX_INLINE_CELLS, MAX_TIME_LIMIT_S
 
 #: longest plan ``/v1/simulate`` accepts (states; 20 000 × 4 cm = 800 m)
 MAX_PLAN_STATES = 20_000

@@ -36,8 +36,9 @@ import zenoh
 from pydantic import BaseModel, ValidationError
 
 from planner.errors import InvalidInput, StartOutsideMap
-from service.core import PlanningService, ServiceSettings
+from service.core import PlanningService
 from service.outcome import Outcome, error_outcome, outcome_of_exception
+from service.settings import ServiceSettings
 from service.wire import GoalMessage, PlanRequest, PoseIn, ReconfigureRequest, SimulateRequest, invalid_input
 
 log = logging.getLogger(__name__)

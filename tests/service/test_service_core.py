@@ -14,15 +14,12 @@ from PIL import Image
 from pydantic import ValidationError
 
 from planner.errors import GoalOccupied, InvalidInput, NotFound, PlannerTimedOut
+from planner.maps.catalogue import map_files
 from planner.occupancy import OccupancyGrid
-from service.core import (
-    PlanningService,
-    ServiceSettings,
-    grid_png,
-    inline_grid,
-    map_index,
-)
+from service.core import PlanningService
+from service.grids import grid_png, inline_grid
 from service.outcome import ServiceBusy, ok_outcome, outcome_of_exception
+from service.settings import ServiceSettings
 from service.wire import PlanRequest, field_name, invalid_input
 from tests.service import service_harness as harness
 from tests.service.service_harness import plan_body, strip_timing
@@ -67,7 +64,7 @@ def test_settings_are_validated_by_field(tmp_path: Path) -> None:
 
 
 def test_map_names_only_reach_maps_in_the_folder(maps_dir: Path) -> None:
-    assert map_index(maps_dir) == {"hall": maps_dir / "hall.yaml"}
+    assert map_files(maps_dir) == {"hall": maps_dir / "hall.yaml"}
     service = PlanningService(ServiceSettings(maps_dir=maps_dir, zenoh=False), NeverDone)
     assert service.resolve_map("hall") == maps_dir / "hall.yaml"
     for name in ("..", "../maps/hall", "hall.yaml", ".hidden", "notes", str(maps_dir / "hall")):
