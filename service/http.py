@@ -21,14 +21,16 @@ from __future__ import annotations
 
 import asyncio
 import logging
-from collections.abc import AsyncIterator
+from collections.abc import AsyncIterator, Callable
+from concurrent.futures import Future
 from contextlib import asynccontextmanager
-from typing import Annotated, Any
+from typing import Annotated, Any, TypeVar
 
 from fastapi import APIRouter, Depends, FastAPI, Request
 from fastapi import Path as PathParam
 from fastapi.exceptions import RequestValidationError
 from fastapi.responses import JSONResponse, Response
+from pydantic import BaseModel
 from starlette.exceptions import HTTPException as StarletteHTTPException
 from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
@@ -54,6 +56,7 @@ from service.wire import (
 log = logging.getLogger(__name__)
 
 JSON = "application/json"
+M = TypeVar("M", bound=BaseModel)
 
 
 def _error(status: int, msg: str, field: str | None = None, headers: dict[str, str] | None = None) -> JSONResponse:
@@ -65,6 +68,13 @@ def outcome_response(outcome: Outcome, retry_after_s: int = 1) -> Response:
     """An :class:`Outcome` as an HTTP response with its row's status; the body bytes are sent as they are."""
     headers = {"Retry-After": str(retry_after_s)} if outcome.kind == "busy" else None
     return Response(outcome.body, outcome.answer.http_status, headers, media_type=JSON)
+
+
+async def answer(service: PlanningService, submit: Callable[[M], Future[Outcome]], body: M) -> Response:
+    """What every job route does: queue ``body`` with ``submit`` (off the event loop: it checks the request
+    and may list the maps folder), wait for the job without blocking the loop, answer its outcome."""
+    future = await asyncio.to_thread(submit, body)
+    return outcome_response(await asyncio.wrap_future(future), service.settings.retry_after_s)
 
 
 class BodyLimit:
@@ -161,8 +171,7 @@ async def post_plan(body: PlanRequest, service: Service) -> Response:
     """Plan a rollable path from ``start`` to ``goal`` on a named map (or an inline grid, at most
     ``max_inline_cells`` cells). Answers the plan result JSON — the same object ``sphereplan plan``
     prints. A failed plan answers 422 with the failed-result JSON and its Nav2 code."""
-    future = await asyncio.to_thread(service.submit_plan, body)
-    return outcome_response(await asyncio.wrap_future(future), service.settings.retry_after_s)
+    return await answer(service, service.submit_plan, body)
 
 
 simulate = APIRouter(prefix="/v1", tags=["simulate"])
@@ -173,8 +182,7 @@ async def post_simulate(body: SimulateRequest, service: Service) -> Response:
     """Roll a plan (the result of ``/v1/plan``) in closed loop on a map: simulator, odometry/GNSS fusion
     and the MPC tracker of paper 001. Answers the SIM.json object ``sphereplan simulate`` writes
     (``trajectory``, ``estimate``, ``odometry``, ``gnss``, ``commands``, ``metrics``)."""
-    future = await asyncio.to_thread(service.submit_simulate, body)
-    return outcome_response(await asyncio.wrap_future(future), service.settings.retry_after_s)
+    return await answer(service, service.submit_simulate, body)
 
 
 reconfigure = APIRouter(prefix="/v1", tags=["reconfigure"])
@@ -185,8 +193,7 @@ async def post_reconfigure(body: ReconfigureRequest, service: Service) -> Respon
     """Spherobot reconfiguration (paper 004): reach ``goal`` with the camera point P on top (and, with
     ``goal_heading``, a heading), proved by rolling the sphere through SO(3). What ``sphereplan
     reconfigure`` prints; with ``map`` the swept sphere is checked against it (failures 203–206, 208)."""
-    future = await asyncio.to_thread(service.submit_reconfigure, body)
-    return outcome_response(await asyncio.wrap_future(future), service.settings.retry_after_s)
+    return await answer(service, service.submit_reconfigure, body)
 
 
 vpip = APIRouter(prefix="/v1/vpip", tags=["vpip"])
@@ -196,16 +203,14 @@ vpip = APIRouter(prefix="/v1/vpip", tags=["vpip"])
 async def post_vpip_rods(body: VpipRodsRequest, service: Service) -> Response:
     """Eq. 18 length of every rod of a rod-driven sphere (paper 000) for one VPIP plane, roll and pitch
     phase: what ``sphereplan vpip rods`` prints."""
-    future = await asyncio.to_thread(service.submit_vpip_rods, body)
-    return outcome_response(await asyncio.wrap_future(future), service.settings.retry_after_s)
+    return await answer(service, service.submit_vpip_rods, body)
 
 
 @vpip.post("/schedule", responses=ERRORS)
 async def post_vpip_schedule(body: VpipScheduleRequest, service: Service) -> Response:
     """The 100 Hz VPIP cascade along a plan: plane angles and rod lengths per tick, the series
     ``sphereplan vpip schedule --out`` writes."""
-    future = await asyncio.to_thread(service.submit_vpip_schedule, body)
-    return outcome_response(await asyncio.wrap_future(future), service.settings.retry_after_s)
+    return await answer(service, service.submit_vpip_schedule, body)
 
 
 tensegrity = APIRouter(prefix="/v1/tensegrity", tags=["tensegrity"])
@@ -215,8 +220,7 @@ tensegrity = APIRouter(prefix="/v1/tensegrity", tags=["tensegrity"])
 async def post_tensegrity_static(body: TensegrityStaticRequest, service: Service) -> Response:
     """The four hybrid static states of the TeXploR two-arc robot (paper 002) for slider angles θ1, θ2:
     what ``sphereplan tensegrity static`` prints."""
-    future = await asyncio.to_thread(service.submit_tensegrity_static, body)
-    return outcome_response(await asyncio.wrap_future(future), service.settings.retry_after_s)
+    return await answer(service, service.submit_tensegrity_static, body)
 
 
 maps = APIRouter(prefix="/v1", tags=["maps"])
