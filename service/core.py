@@ -236,7 +236,7 @@ class PlanningService:
         """Queue a Spherobot reconfiguration (optionally checked against a map). The goal may be at most
         ``MAX_RECONFIGURE_RADII`` sphere radii from the start: the rolled result is sampled along the way,
         so its size and cost grow with distance / radius."""
-        from planner.spherobot.reconfigure import ROBOT
+        from planner.spherobot.request import ROBOT
 
         radius = request.radius_m if request.radius_m is not None else load_robot(ROBOT).radius_m
         distance = math.dist(request.start, request.goal)

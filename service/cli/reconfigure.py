@@ -6,7 +6,8 @@ import argparse
 from typing import Any
 
 from planner.occupancy import OccupancyGrid
-from planner.spherobot.reconfigure import METHODS, plan_reconfiguration
+from planner.spherobot.reconfigure import plan_reconfiguration
+from planner.spherobot.request import METHODS
 from service.cli._io import emit_json, finite_float, positive_float
 
 VERB = "reconfigure"

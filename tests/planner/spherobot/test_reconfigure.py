@@ -9,13 +9,9 @@ import pytest
 
 from planner.errors import GoalOutsideMap, InvalidInput, NoValidPathFound, StartOccupied
 from planner.occupancy import OccupancyGrid
-from planner.spherobot.reconfigure import (
-    ReconfigureRequest,
-    benchmark,
-    candidates,
-    format_benchmark,
-    plan_reconfiguration,
-)
+from planner.spherobot.bench import benchmark, format_benchmark
+from planner.spherobot.reconfigure import candidates, plan_reconfiguration
+from planner.spherobot.request import ReconfigureRequest
 from tests.reconfigcheck import check_result, disc_hits
 
 EXAMPLE = {
