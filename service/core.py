@@ -36,6 +36,7 @@ from planner.maps.catalogue import default_maps_dir, list_maps, map_files
 from planner.maps.nav2 import MESH_SUFFIXES
 from planner.occupancy import OccupancyGrid
 from planner.robot import DEFAULT_ROBOT, builtin_robots, load_robot
+from planner.spherobot.request import ReconfigureRequest
 from service.grids import grid_png, load_map_file
 from service.jobs import (
     plan_job,
@@ -48,11 +49,13 @@ from service.jobs import (
     worker_init,
 )
 from service.outcome import Outcome, ServiceBusy, error_outcome, outcome_of_exception
+from service.pipeline import PlanQuery
 from service.settings import ServiceSettings
 from service.wire import (
+    InlineGrid,
     PlanIn,
     PlanRequest,
-    ReconfigureRequest,
+    ReconfigureIn,
     SimulateRequest,
     TensegrityStaticRequest,
     VpipRodsRequest,
@@ -63,6 +66,10 @@ log = logging.getLogger(__name__)
 
 #: farthest reconfiguration goal, in sphere radii from the start (paper 004's examples are a few radii)
 MAX_RECONFIGURE_RADII = 200
+
+
+def _radians(angle: float, degrees: bool) -> float:
+    return math.radians(angle) if degrees else float(angle)
 
 
 class PlanningService:
@@ -194,28 +201,30 @@ class PlanningService:
             raise NotFound("robot", f"unknown robot {name!r}; built-in: {', '.join(builtin_robots())}")
 
     def submit_plan(self, request: PlanRequest) -> Future[Outcome]:
-        """Validate ``request`` against this service (map, robot, options, limits) and queue the plan.
+        """Check ``request`` against this service (robot, options, limits, map) and queue the plan.
 
         Raises :class:`NotFound`/:class:`InvalidInput` for a bad request and :class:`ServiceBusy`.
         """
         self.resolve_robot(request.robot)
-        PlannerOptions.from_dict(dict(request.options or {}))
-        if request.time_limit_s is not None and request.time_limit_s > self.settings.max_time_limit_s:
-            raise InvalidInput("time_limit_s", f"must be ≤ {self.settings.max_time_limit_s:g} s on this server")
-        options_limit = (request.options or {}).get("time_limit_s")
-        if isinstance(options_limit, int | float) and options_limit > self.settings.max_time_limit_s:
-            raise InvalidInput("options.time_limit_s", f"must be ≤ {self.settings.max_time_limit_s:g} s on this server")
-        return self._submit(plan_job, request.request_json(), self._map_argument(request.map))
+        options = request.options or {}
+        query = PlanQuery(request.start.as_pose(), request.goal.as_pose(), PlannerOptions.from_dict(options),
+                          request.time_limit_s)
+        limit = self.settings.max_time_limit_s
+        if query.time_limit_s is not None and query.time_limit_s > limit:
+            raise InvalidInput("time_limit_s", f"must be ≤ {limit:g} s on this server")
+        if "time_limit_s" in options and query.options.time_limit_s > limit:
+            raise InvalidInput("options.time_limit_s", f"must be ≤ {limit:g} s on this server")
+        return self._submit(plan_job, query, request.robot, self._map_source(request.map))
 
-    def _map_argument(self, map_spec: str | Any) -> str | None:
-        """The file of a named map (checked now), or None for an inline grid (size checked now)."""
+    def _map_source(self, map_spec: str | InlineGrid) -> Path | InlineGrid:
+        """The file of a named map (checked now), or the inline grid (size checked now)."""
         if isinstance(map_spec, str):
-            return str(self.resolve_map(map_spec))
+            return self.resolve_map(map_spec)
         cells = len(map_spec.data) * len(map_spec.data[0])
         if cells > self.settings.max_inline_cells:
             limit = self.settings.max_inline_cells
             raise InvalidInput("map.data", f"{cells} cells; this server accepts at most {limit}")
-        return None
+        return map_spec
 
     def _plan_robot(self, robot: str | None, path: PlanIn, default: str) -> str:
         """The robot a plan-consuming request uses: its own, else the plan's (built-in only), else ``default``."""
@@ -229,37 +238,43 @@ class PlanningService:
 
     def submit_simulate(self, request: SimulateRequest) -> Future[Outcome]:
         """Queue a closed-loop simulation of ``request.path`` (robot: the request's, else the plan's)."""
-        robot = self._plan_robot(request.robot, request.path, DEFAULT_ROBOT)
-        return self._submit(simulate_job, request.request_json(), self._map_argument(request.map), robot)
+        from planner.closed_loop.simulate import SimulationOptions
+        from planner.closed_loop.tracker import MPCParams
 
-    def submit_reconfigure(self, request: ReconfigureRequest) -> Future[Outcome]:
+        robot = self._plan_robot(request.robot, request.path, DEFAULT_ROBOT)
+        options = SimulationOptions(control_rate_hz=request.rate_hz, tracker=request.tracker,
+                                    mpc=MPCParams(horizon=request.horizon), time_limit_s=request.time_limit_s)
+        return self._submit(simulate_job, request.path.model_dump(mode="json"), self._map_source(request.map), robot,
+                            request.seed, request.noise, options)
+
+    def submit_reconfigure(self, request: ReconfigureIn) -> Future[Outcome]:
         """Queue a Spherobot reconfiguration (optionally checked against a map). The goal may be at most
         ``MAX_RECONFIGURE_RADII`` sphere radii from the start: the rolled result is sampled along the way,
         so its size and cost grow with distance / radius."""
-        from planner.spherobot.request import ROBOT
-
-        radius = request.radius_m if request.radius_m is not None else load_robot(ROBOT).radius_m
-        distance = math.dist(request.start, request.goal)
-        if distance > MAX_RECONFIGURE_RADII * radius:
+        problem = ReconfigureRequest.from_dict(request.model_dump(exclude={"map"}))
+        assert problem.radius_m is not None
+        distance, farthest = math.dist(problem.start, problem.goal), MAX_RECONFIGURE_RADII * problem.radius_m
+        if distance > farthest:
             raise InvalidInput("goal", f"is {distance:.3g} m from the start; this server rolls at most "
-                                       f"{MAX_RECONFIGURE_RADII} sphere radii ({MAX_RECONFIGURE_RADII * radius:.3g} m)")
-        map_path = None if request.map is None else self._map_argument(request.map)
-        return self._submit(reconfigure_job, request.request_json(), map_path)
+                                       f"{MAX_RECONFIGURE_RADII} sphere radii ({farthest:.3g} m)")
+        return self._submit(reconfigure_job, problem, None if request.map is None else self._map_source(request.map))
 
     def submit_vpip_rods(self, request: VpipRodsRequest) -> Future[Outcome]:
         """Queue one eq. 18 rod-length evaluation."""
         self.resolve_robot(request.robot)
-        return self._submit(vpip_rods_job, request.request_json())
+        angles = (request.phi_vpip, request.theta_vpip, request.roll, request.pitch_phase)
+        return self._submit(vpip_rods_job, *(_radians(a, request.degrees) for a in angles), request.robot)
 
     def submit_vpip_schedule(self, request: VpipScheduleRequest) -> Future[Outcome]:
         """Queue a 100 Hz VPIP schedule along ``request.path`` (robot: the request's, the plan's, daedalus)."""
         robot = self._plan_robot(request.robot, request.path, "daedalus")
-        return self._submit(vpip_schedule_job, request.request_json(), robot)
+        return self._submit(vpip_schedule_job, request.path.model_dump(mode="json"), robot, request.driver)
 
     def submit_tensegrity_static(self, request: TensegrityStaticRequest) -> Future[Outcome]:
         """Queue the TeXploR static-state computation."""
         self.resolve_robot(request.robot)
-        return self._submit(tensegrity_static_job, request.request_json())
+        return self._submit(tensegrity_static_job, _radians(request.theta1, request.degrees),
+                            _radians(request.theta2, request.degrees), request.robot, request.verify)
 
     def plan(self, request: PlanRequest, timeout_s: float | None = None) -> Outcome:
         """Blocking plan: the :class:`Outcome`, with request errors and busy mapped to outcomes too."""

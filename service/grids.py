@@ -13,13 +13,16 @@ import threading
 from collections import OrderedDict
 from collections.abc import Callable
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from planner.maps.nav2 import MESH_SUFFIXES
 from planner.occupancy import OccupancyGrid
 from planner.robot import load_robot
+
+if TYPE_CHECKING:
+    from service.wire import InlineGrid
 
 _GRIDS: OrderedDict[tuple[Any, ...], OccupancyGrid] = OrderedDict()
 _GRID_CACHE_SIZE = 8
@@ -50,15 +53,20 @@ def load_map_file(path: Path, robot_name: str | None) -> OccupancyGrid:
     return _cached(key, lambda: load_any(path, load_robot(robot_name) if mesh else None))
 
 
-def inline_grid(spec: dict[str, Any]) -> OccupancyGrid:
-    """An :class:`OccupancyGrid` from the inline-grid JSON of :class:`service.wire.InlineGrid` (cached
-    by content, so repeated inline requests reuse the planner built for it)."""
-    data = np.asarray(spec["data"], dtype=np.int8)
-    origin = tuple(float(v) for v in spec["origin"])
+def inline_grid(spec: InlineGrid) -> OccupancyGrid:
+    """An :class:`OccupancyGrid` from an inline grid (cached by content, so repeated inline requests
+    reuse the planner built for it)."""
+    data = np.asarray(spec.data, dtype=np.int8)
+    origin = (float(spec.origin[0]), float(spec.origin[1]), float(spec.origin[2]))
     digest = hashlib.sha1(data.tobytes()).hexdigest()
-    key = ("inline", digest, data.shape, float(spec["resolution_m"]), origin, spec["name"])
-    return _cached(key, lambda: OccupancyGrid(data=data, resolution_m=float(spec["resolution_m"]),
-                                              origin=origin, name=str(spec["name"])))  # type: ignore[arg-type]
+    key = ("inline", digest, data.shape, float(spec.resolution_m), origin, spec.name)
+    return _cached(key, lambda: OccupancyGrid(data=data, resolution_m=float(spec.resolution_m),
+                                              origin=origin, name=spec.name))
+
+
+def load_grid(source: Path | InlineGrid, robot_name: str | None) -> OccupancyGrid:
+    """The grid of a request: a map file of the maps folder (:func:`load_map_file`) or an inline grid."""
+    return load_map_file(source, robot_name) if isinstance(source, Path) else inline_grid(source)
 
 
 def grid_png(grid: OccupancyGrid) -> bytes:

@@ -44,7 +44,7 @@ from service.wire import (
     MapInfo,
     PlanRequest,
     PlanResultOut,
-    ReconfigureRequest,
+    ReconfigureIn,
     RobotInfo,
     SimulateRequest,
     TensegrityStaticRequest,
@@ -189,7 +189,7 @@ reconfigure = APIRouter(prefix="/v1", tags=["reconfigure"])
 
 
 @reconfigure.post("/reconfigure", responses=ERRORS)
-async def post_reconfigure(body: ReconfigureRequest, service: Service) -> Response:
+async def post_reconfigure(body: ReconfigureIn, service: Service) -> Response:
     """Spherobot reconfiguration (paper 004): reach ``goal`` with the camera point P on top (and, with
     ``goal_heading``, a heading), proved by rolling the sphere through SO(3). What ``sphereplan
     reconfigure`` prints; with ``map`` the swept sphere is checked against it (failures 203–206, 208)."""

@@ -8,21 +8,25 @@ A computation that meets an error is answered as the outcome table says (:mod:`s
 from __future__ import annotations
 
 import logging
-import math
 import os
 from collections.abc import Callable
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from planner.errors import InvalidInput, PlanningError, SpherePlanError
 from planner.occupancy import OccupancyGrid
 from planner.robot import load_robot
-from service.grids import inline_grid, load_map_file
+from service.grids import load_grid
 from service.outcome import Outcome, error_outcome, ok_outcome, outcome_of_exception
-from service.pipeline import execute_plan
+from service.pipeline import PlanQuery, execute_plan
 from service.settings import MAX_TIME_LIMIT_S
+
+if TYPE_CHECKING:
+    from planner.closed_loop.simulate import SimulationOptions
+    from planner.spherobot.request import ReconfigureRequest
+    from service.wire import InlineGrid
 
 log = logging.getLogger(__name__)
 
@@ -50,102 +54,73 @@ def warm_up_job() -> int:
     return os.getpid()
 
 
-def plan_job(request: dict[str, Any], map_path: str | None) -> Outcome:
-    """Run one plan request (the JSON of a validated :class:`PlanRequest`) in a worker process.
-
-    The same pipeline as ``sphereplan plan``: load the robot and the map, then
-    :func:`service.pipeline.execute_plan`.
-    """
-    robot_json = None
-    try:
-        robot = load_robot(request.get("robot"))
-        robot_json = robot.to_json()
-        grid = load_map_file(Path(map_path), request.get("robot")) if map_path is not None else inline_grid(
-            request["map"])
-        result = execute_plan(request, grid, robot)
-        return ok_outcome(result.to_json())
-    except SpherePlanError as exc:
-        return outcome_of_exception(exc, robot_json)
-    except (ValueError, ArithmeticError) as exc:  # see _job
-        log.warning("plan: computation failed for a request", exc_info=True)
-        return error_outcome(InvalidInput, f"the plan computation failed for this input: {type(exc).__name__}: {exc}")
-    except Exception as exc:  # a bug, not the client's fault: log it and answer 500
-        log.exception("plan job failed")
-        return outcome_of_exception(exc)
-
-
-def simulate_job(request: dict[str, Any], map_path: str | None, robot_name: str) -> Outcome:
-    """Run one simulate request in a worker: ``simulate_plan`` with the options of ``sphereplan simulate``."""
-    from planner.closed_loop.simulate import SimulationOptions, simulate_plan
-    from planner.closed_loop.tracker import MPCParams
-
-    def compute() -> dict[str, Any]:
-        grid = load_map_file(Path(map_path), None) if map_path is not None else inline_grid(request["map"])
-        options = SimulationOptions(control_rate_hz=request["rate_hz"], tracker=request["tracker"],
-                                    mpc=MPCParams(horizon=request["horizon"]), time_limit_s=request["time_limit_s"])
-        return simulate_plan(grid, request["path"], load_robot(robot_name), seed=request["seed"],
-                             noise=request["noise"], options=options)
-
-    return _job("simulate", compute)
-
-
-def _job(name: str, compute: Callable[[], Any]) -> Outcome:
+def _job(name: str, compute: Callable[[], Any], plan_robot: Callable[[], Any] | None = None) -> Outcome:
     """Run one capability's computation: its JSON, or the error outcome.
 
-    A ``ValueError``/``ArithmeticError`` that is not a sphereplan error means the request's numbers took
-    the computation outside its domain (or produced NaN): answered as bad input (422), logged with the
-    traceback so the unchecked case can be turned into a named error in ``planner/``.
+    A planning failure answers the failed plan-result JSON when ``plan_robot`` gives the plan's robot JSON,
+    else the short failed body. A ``ValueError``/``ArithmeticError`` that is not a sphereplan error means
+    the request's numbers took the computation outside its domain (or produced NaN): answered as bad
+    input, logged with the traceback so the unchecked case can be turned into a named error in ``planner/``.
     """
     try:
         return ok_outcome(compute())
+    except PlanningError as exc:
+        return outcome_of_exception(exc, plan_robot() if plan_robot is not None else None)
     except SpherePlanError as exc:
-        return outcome_of_exception(exc, plan=False)
+        return outcome_of_exception(exc)
     except (ValueError, ArithmeticError) as exc:
         log.warning("%s: computation failed for a request", name, exc_info=True)
         return error_outcome(InvalidInput, f"the {name} computation failed for this input: {type(exc).__name__}: {exc}")
-    except Exception as exc:
+    except Exception as exc:  # a bug, not the client's fault: log it and answer 500
         log.exception("%s job failed", name)
         return outcome_of_exception(exc)
 
 
-def _radians(request: dict[str, Any], key: str) -> float:
-    return math.radians(request[key]) if request["degrees"] else float(request[key])
-
-
-def tensegrity_static_job(request: dict[str, Any]) -> Outcome:
-    """``static_equilibria`` in a worker (what ``sphereplan tensegrity static`` prints)."""
-    from planner.tensegrity import static_equilibria
-
-    return _job("tensegrity", lambda: static_equilibria(
-        _radians(request, "theta1"), _radians(request, "theta2"), load_robot(request["robot"]), request["verify"]))
-
-
-def reconfigure_job(request: dict[str, Any], map_path: str | None) -> Outcome:
-    """``plan_reconfiguration`` in a worker (what ``sphereplan reconfigure`` prints)."""
-    from planner.spherobot.reconfigure import plan_reconfiguration
+def plan_job(query: PlanQuery, robot_name: str | None, source: Path | InlineGrid) -> Outcome:
+    """One plan, the pipeline of ``sphereplan plan``: load the robot and the grid, then
+    :func:`service.pipeline.execute_plan`."""
 
     def compute() -> dict[str, Any]:
-        grid = None
-        if map_path is not None:
-            grid = load_map_file(Path(map_path), None)
-        elif request["map"] is not None:
-            grid = inline_grid(request["map"])
-        return plan_reconfiguration({k: v for k, v in request.items() if k != "map"}, grid=grid)
+        robot = load_robot(robot_name)
+        return execute_plan(query, load_grid(source, robot_name), robot).to_json()
 
-    return _job("reconfigure", compute)
+    return _job("plan", compute, plan_robot=lambda: load_robot(robot_name).to_json())
 
 
-def vpip_rods_job(request: dict[str, Any]) -> Outcome:
-    """``rods_report`` in a worker (what ``sphereplan vpip rods`` prints)."""
+def simulate_job(plan: dict[str, Any], source: Path | InlineGrid, robot_name: str, seed: int, noise: str,
+                 options: SimulationOptions) -> Outcome:
+    """``simulate_plan`` of a plan result (what ``sphereplan simulate`` writes)."""
+    from planner.closed_loop.simulate import simulate_plan
+
+    return _job("simulate", lambda: simulate_plan(load_grid(source, None), plan, load_robot(robot_name), seed=seed,
+                                                  noise=noise, options=options))
+
+
+def reconfigure_job(problem: ReconfigureRequest, source: Path | InlineGrid | None) -> Outcome:
+    """``plan_reconfiguration``, checked against the grid when there is one (what ``sphereplan reconfigure``
+    prints)."""
+    from planner.spherobot.reconfigure import plan_reconfiguration
+
+    return _job("reconfigure", lambda: plan_reconfiguration(
+        problem, grid=None if source is None else load_grid(source, None)))
+
+
+def tensegrity_static_job(theta1: float, theta2: float, robot_name: str, verify: bool) -> Outcome:
+    """``static_equilibria`` (what ``sphereplan tensegrity static`` prints); angles in radians."""
+    from planner.tensegrity import static_equilibria
+
+    return _job("tensegrity", lambda: static_equilibria(theta1, theta2, load_robot(robot_name), verify))
+
+
+def vpip_rods_job(phi_vpip: float, theta_vpip: float, roll: float, pitch_phase: float, robot_name: str) -> Outcome:
+    """``rods_report`` (what ``sphereplan vpip rods`` prints); angles in radians."""
     from planner.vpip.api import rods_report
 
-    return _job("vpip rods", lambda: rods_report(
-        _radians(request, "phi_vpip"), _radians(request, "theta_vpip"), _radians(request, "roll"),
-        _radians(request, "pitch_phase"), request["robot"]))
+    return _job("vpip rods", lambda: rods_report(phi_vpip, theta_vpip, roll, pitch_phase, robot_name))
 
 
-def vpip_schedule_job(request: dict[str, Any], robot_name: str) -> Outcome:
-    """``schedule_report`` in a worker (the series ``sphereplan vpip schedule --out`` writes)."""
+def vpip_schedule_job(plan: dict[str, Any], robot_name: str, driver: str) -> Outcome:
+    """``schedule_report`` of a plan result (the series ``sphereplan vpip schedule --out`` writes)."""
     from planner.vpip.api import schedule_report
 
-    return _job("vpip schedule", lambda: schedule_report(request["path"], robot_name, request["driver"]))
+    return _job("vpip schedule", lambda: schedule_report(plan, robot_name, driver))

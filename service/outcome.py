@@ -114,17 +114,17 @@ def error_outcome(error: type[BaseException], msg: str, field: str | None = None
     return Outcome(answer_for(error), dumps(error_body(msg, field, code)), code)
 
 
-def outcome_of_exception(exc: BaseException, robot_json: Any = None, plan: bool = True) -> Outcome:
-    """``exc`` as an :class:`Outcome`, answered by its row. A planning failure of ``/v1/plan``
-    (``plan``) carries the failed plan-result JSON with ``robot_json``; of other capabilities
+def outcome_of_exception(exc: BaseException, plan_robot: Any = None) -> Outcome:
+    """``exc`` as an :class:`Outcome`, answered by its row. A planning failure is the failed plan-result
+    JSON of docs/contracts.md when ``plan_robot`` (the robot JSON of a plan) is given, else
     ``{status: failed, error_code, error_msg, field: null}``. A bug's message names only its type."""
     answer = answer_for(exc)
     if isinstance(exc, PlanningError):
-        if plan:
+        if plan_robot is not None:
             from planner.result import failure_json
 
             body = failure_json(exc.code, exc.msg, None)
-            body["robot"] = robot_json
+            body["robot"] = plan_robot
         else:
             body = {"status": "failed", "error_code": exc.code, "error_msg": exc.msg, "field": None}
         return Outcome(answer, dumps(body), exc.code)

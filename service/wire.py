@@ -53,6 +53,9 @@ class PoseIn(_Strict):
     y: Metres
     yaw: Angle = Field(description="rad, counter-clockwise from +x")
 
+    def as_pose(self) -> tuple[float, float, float]:
+        return self.x, self.y, self.yaw
+
 
 class InlineGrid(_Strict):
     """An occupancy grid sent inline: ``data[iy][ix]`` in 0..100 (percent) or −1 (unknown), row 0 at
@@ -88,10 +91,6 @@ class PlanRequest(_Strict):
     options: dict[Annotated[str, Field(max_length=64)], OptionValue] | None = Field(
         default=None, max_length=64, description="planner options (PlannerOptions field names)"
     )
-
-    def request_json(self) -> dict[str, Any]:
-        """The request as plain JSON data (what crosses into a worker process)."""
-        return self.model_dump(mode="json")
 
 
 class GoalMessage(_Strict):
@@ -159,9 +158,6 @@ class SimulateRequest(_Strict):
     time_limit_s: float | None = Field(default=None, gt=0, le=MAX_SIM_TIME_S,
                                        description="simulated seconds (default 2 × rolling time + 20 s)")
 
-    def request_json(self) -> dict[str, Any]:
-        return self.model_dump(mode="json")
-
 
 class TensegrityStaticRequest(_Strict):
     """``POST /v1/tensegrity/static``: the four hybrid static states of TeXploR for slider angles θ1, θ2
@@ -173,15 +169,12 @@ class TensegrityStaticRequest(_Strict):
     verify: bool = Field(default=True, description="cross-check with a potential-energy minimisation")
     robot: Name = "texplor"
 
-    def request_json(self) -> dict[str, Any]:
-        return self.model_dump(mode="json")
-
 
 Pair = Annotated[list[Metres], Field(min_length=2, max_length=2)]
 AnglePair = Annotated[list[Angle], Field(min_length=2, max_length=2)]
 
 
-class ReconfigureRequest(_Strict):
+class ReconfigureIn(_Strict):
     """``POST /v1/reconfigure`` and the ``sphereplan/reconfigure`` query: roll a Spherobot (paper 004) to
     ``goal`` with its camera point P on top (as ``sphereplan reconfigure``). Angles in radians unless
     ``degrees``; ``map`` (a name or an inline grid) checks the swept sphere against obstacles."""
@@ -199,9 +192,6 @@ class ReconfigureRequest(_Strict):
     map: Name | InlineGrid | None = None
     allow_unknown: bool = False
 
-    def request_json(self) -> dict[str, Any]:
-        return self.model_dump(mode="json")
-
 
 class VpipRodsRequest(_Strict):
     """``POST /v1/vpip/rods``: eq. 18 rod lengths for one VPIP plane, roll and pitch phase (paper 000), as
@@ -214,9 +204,6 @@ class VpipRodsRequest(_Strict):
     degrees: bool = False
     robot: Name = "daedalus"
 
-    def request_json(self) -> dict[str, Any]:
-        return self.model_dump(mode="json")
-
 
 class VpipScheduleRequest(_Strict):
     """``POST /v1/vpip/schedule``: 100 Hz VPIP angles and rod lengths along a plan (the time series
@@ -225,9 +212,6 @@ class VpipScheduleRequest(_Strict):
     path: PlanIn
     robot: Name | None = Field(default=None, description="default: the plan's robot, else daedalus")
     driver: Literal["vpip", "simple"] = "vpip"
-
-    def request_json(self) -> dict[str, Any]:
-        return self.model_dump(mode="json")
 
 
 # ------------------------------------------------------------------------------------ response documentation

@@ -7,7 +7,7 @@ Key expressions (payloads are the same JSON as the HTTP API, encoding ``applicat
   the callback only validates and submits, the reply is sent when the job finishes, so a slow plan
   never blocks other queries. Every query is finalised (``drop``) once answered.
 * queryables ``sphereplan/reconfigure`` and ``sphereplan/simulate`` — payloads a
-  :class:`~service.wire.ReconfigureRequest` / :class:`~service.wire.SimulateRequest`, replying what
+  :class:`~service.wire.ReconfigureIn` / :class:`~service.wire.SimulateRequest`, replying what
   ``/v1/reconfigure`` / ``/v1/simulate`` answer.
 * ``sphereplan/*/pose`` (a :class:`~service.wire.PoseIn`) and ``sphereplan/*/goal`` (a
   :class:`~service.wire.GoalMessage`), taken by one subscriber so that a pose published just before a
@@ -39,7 +39,7 @@ from planner.errors import InvalidInput, StartOutsideMap
 from service.core import PlanningService
 from service.outcome import Outcome, error_outcome, outcome_of_exception
 from service.settings import ServiceSettings
-from service.wire import GoalMessage, PlanRequest, PoseIn, ReconfigureRequest, SimulateRequest, invalid_input
+from service.wire import GoalMessage, PlanRequest, PoseIn, ReconfigureIn, SimulateRequest, invalid_input
 
 log = logging.getLogger(__name__)
 
@@ -104,7 +104,7 @@ class ZenohNode:
         # one entry per queryable capability: key suffix → (request model, submit)
         self.queryables: dict[str, tuple[type[BaseModel], Callable[[Any], Future[Outcome]]]] = {
             "plan": (PlanRequest, service.submit_plan),
-            "reconfigure": (ReconfigureRequest, service.submit_reconfigure),
+            "reconfigure": (ReconfigureIn, service.submit_reconfigure),
             "simulate": (SimulateRequest, service.submit_simulate),
         }
 

@@ -52,7 +52,7 @@ def _load_grid(path: str) -> OccupancyGrid:
 
 
 def candidates(req: ReconfigureRequest) -> list[Manoeuvre]:
-    """All candidate manoeuvres of the request's method, shortest first (request must be validated)."""
+    """All candidate manoeuvres of the request's method, shortest first."""
     assert req.radius_m is not None
     q0 = req.start_quat
     if req.method == "arc":
@@ -65,12 +65,13 @@ def plan_reconfiguration(
 ) -> dict[str, Any]:
     """Plan, roll and (optionally) map-check a reconfiguration; return the result JSON as a dict.
 
-    ``grid`` overrides ``request.map``. Raises InvalidInput for bad requests, Start/GoalOccupied,
-    Start/GoalOutsideMap, and NoValidPathFound (with the reason) when every alternative collides.
+    The doors pass the :class:`ReconfigureRequest` they built; a JSON request (Python callers) is read
+    with :meth:`ReconfigureRequest.from_dict`. ``grid`` overrides ``request.map``. Raises InvalidInput for
+    a bad request or map, Start/GoalOccupied, Start/GoalOutsideMap, and NoValidPathFound (with the
+    reason) when every alternative collides.
     """
     t_start = time.perf_counter()
     req = request if isinstance(request, ReconfigureRequest) else ReconfigureRequest.from_dict(request)
-    req = req.validated()
     assert req.radius_m is not None and req.roll_rate_rad_s is not None
     R = req.radius_m
     speed = req.roll_rate_rad_s * R

@@ -25,7 +25,7 @@ ROBOT = "spherobot"
 
 @dataclass(frozen=True)
 class ReconfigureRequest:
-    """A reconfiguration problem (SI units, radians).
+    """A reconfiguration problem (SI units, radians), checked when it is made.
 
     ``start_tilt`` is (θ, α) of paper 004 Fig. 2: P = (sin θ cos α, sin θ sin α, cos θ), θ ∈ [0, π]; the
     start orientation is Rot((−sin α, cos α, 0), θ)·Rz(start_spin). Without ``goal_heading`` (azimuth of
@@ -47,7 +47,8 @@ class ReconfigureRequest:
 
     @classmethod
     def from_dict(cls, data: Mapping[str, Any]) -> ReconfigureRequest:
-        """Validate a JSON request; angles are in degrees when ``degrees`` is true. Raises InvalidInput."""
+        """Read a JSON request (the CLI's, HTTP's and Zenoh's): angles are in degrees when ``degrees`` is
+        true; unknown keys and wrong types raise InvalidInput naming the field."""
         known = {f for f in cls.__dataclass_fields__} | {"degrees"}
         for key in data:
             if key not in known:
@@ -84,8 +85,9 @@ class ReconfigureRequest:
             allow_unknown=allow_unknown,
         )
 
-    def validated(self) -> ReconfigureRequest:
-        """Check ranges and fill the profile defaults; raises InvalidInput naming the field."""
+    def __post_init__(self) -> None:
+        """Check every field and fill ``radius_m`` and ``roll_rate_rad_s`` from the profile when not given,
+        so a request that exists is one the planners can take; raises InvalidInput naming the field."""
         if self.method not in METHODS:
             raise InvalidInput("method", f"must be one of {', '.join(METHODS)}, got {self.method!r}")
         for name in ("start", "goal", "start_tilt"):
@@ -103,32 +105,17 @@ class ReconfigureRequest:
             raise InvalidInput("alpha_final", "only the arc method has a final roll direction")
         if self.alpha_final is not None and self.goal_heading is not None:
             raise InvalidInput("alpha_final", "cannot be combined with goal_heading (the heading fixes α_f)")
-        profile = None
-        radius, rate = self.radius_m, self.roll_rate_rad_s
-        if radius is None or rate is None:
+        if self.radius_m is None or self.roll_rate_rad_s is None:
             profile = load_robot(ROBOT)
-        if radius is None:
-            assert profile is not None
-            radius = profile.radius_m
-        if rate is None:
-            assert profile is not None
-            rate = float(profile.extra.get("spherobot", {}).get("roll_rate_rad_s", 1.0))
-        for name, v in (("radius_m", radius), ("roll_rate_rad_s", rate)):
+            if self.radius_m is None:
+                object.__setattr__(self, "radius_m", profile.radius_m)
+            if self.roll_rate_rad_s is None:
+                rate = float(profile.extra.get("spherobot", {}).get("roll_rate_rad_s", 1.0))
+                object.__setattr__(self, "roll_rate_rad_s", rate)
+        for name in ("radius_m", "roll_rate_rad_s"):
+            v = getattr(self, name)
             if not (math.isfinite(v) and v > 0):
                 raise InvalidInput(name, f"must be a finite number > 0, got {v!r}")
-        return ReconfigureRequest(
-            self.method,
-            self.start,
-            self.goal,
-            self.start_tilt,
-            self.start_spin,
-            self.goal_heading,
-            self.alpha_final,
-            radius,
-            rate,
-            self.map,
-            self.allow_unknown,
-        )
 
     @property
     def start_quat(self) -> Quat:

@@ -20,7 +20,7 @@ from service.core import PlanningService
 from service.grids import grid_png, inline_grid
 from service.outcome import ServiceBusy, ok_outcome, outcome_of_exception
 from service.settings import ServiceSettings
-from service.wire import PlanRequest, field_name, invalid_input
+from service.wire import InlineGrid, PlanRequest, field_name, invalid_input
 from tests.service import service_harness as harness
 from tests.service.service_harness import plan_body, strip_timing
 
@@ -178,10 +178,10 @@ def test_plan_in_a_thread_pool_matches_the_planner(maps_dir: Path) -> None:
 
 def test_inline_grids_are_cached_by_content() -> None:
     spec = {"data": [[0, 0, 100], [0, -1, 0]], "resolution_m": 0.5, "origin": [1.0, 2.0, 0.0], "name": "tiny"}
-    grid = inline_grid(spec)
-    assert grid is inline_grid(json.loads(json.dumps(spec)))
+    grid = inline_grid(InlineGrid.model_validate(spec))
+    assert grid is inline_grid(InlineGrid.model_validate(json.loads(json.dumps(spec))))
     assert grid.data.dtype == np.int8 and grid.data[0, 2] == 100 and grid.origin == (1.0, 2.0, 0.0)
-    assert grid is not inline_grid({**spec, "resolution_m": 0.25})
+    assert grid is not inline_grid(InlineGrid.model_validate({**spec, "resolution_m": 0.25}))
 
 
 def test_map_png_is_north_up_with_map_server_shades() -> None:

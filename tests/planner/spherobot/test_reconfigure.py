@@ -161,7 +161,7 @@ def test_start_on_an_obstacle_and_goal_outside_the_map():
 
 
 def test_candidates_are_sorted_shortest_first():
-    req = ReconfigureRequest.from_dict({**EXAMPLE, "alpha_final": None, "goal_heading": 40.0}).validated()
+    req = ReconfigureRequest.from_dict({**EXAMPLE, "alpha_final": None, "goal_heading": 40.0})
     lengths = [m.length_m for m in candidates(req)]
     assert lengths == sorted(lengths) and len(lengths) > 2
 
