@@ -1,19 +1,15 @@
-"""The transport-free planning service: one object that the HTTP app and the Zenoh node both call.
+"""The planning service: :class:`PlanningService`, the one object the HTTP app and the Zenoh node call.
 
-:class:`PlanningService` owns a process pool (planning is CPU-bound), warmed at start-up so the first
-request does not pay for imports and compiled-code loading. Each job carries its own deadline (the
-planner's time limit); at most ``max_in_flight`` jobs are queued or running, beyond that a submit
-raises :class:`ServiceBusy` (HTTP 503 + Retry-After). Each capability is one method here that returns
-a :class:`concurrent.futures.Future` of an :class:`Outcome`: the result JSON (bytes, exactly what the
-CLI prints) and what kind of answer it is, which each transport maps onto its own status.
-
-Bad requests are rejected in the calling process before a job is queued: unknown map or robot
-(:class:`~planner.errors.NotFound`), bad planner options (:class:`~planner.errors.InvalidInput`).
-Map names are looked up in a listing of the maps folder, never joined onto a path, so a request can
-only reach a map file that is in that folder.
-
-Worker processes cache loaded maps and (through :func:`planner.hybrid_astar.plan.plan_path`) Hybrid A*
-planners per (map, robot, options), so repeated queries on a map skip the distance transform.
+Each capability is one ``submit_*`` method: it checks the request against this server (map and robot
+names, limits), builds the planner's own typed objects from it (a :class:`~service.pipeline.PlanQuery`,
+the Spherobot ``ReconfigureRequest``, ``SimulationOptions``, angles in radians) and queues one job of
+:mod:`service.jobs` in a process pool (planning is CPU-bound), returning a future
+:class:`~service.outcome.Outcome`. So a bad request is refused in the calling process before a job is
+queued. The pool is warmed at start-up so the first request does not pay for imports and compiled-code
+loading; each job carries its own deadline (the planner's time limit) and at most ``max_in_flight`` jobs
+are queued or running, beyond that a submit raises :class:`~service.outcome.ServiceBusy`. Map names are
+looked up in a listing of the maps folder, never joined onto a path, so a request can only reach a map
+file that is in that folder.
 """
 
 from __future__ import annotations

@@ -1,13 +1,17 @@
 """The HTTP API: a thin FastAPI adapter over :class:`service.core.PlanningService`.
 
 ``create_app(settings)`` builds the app; its lifespan opens the warmed process pool and the Zenoh node
-and closes both on shutdown. One router per resource (health, plan, maps, robots). Every error is JSON
-``{error_code, error_msg, field}`` with a Nav2 code (200 = not a planning failure):
+and closes both on shutdown. One router per resource (health, plan, simulate, reconfigure, vpip,
+tensegrity, maps, robots); every job route answers through :func:`answer`. An error raised by the
+service is answered as the outcome table says (:mod:`service.outcome`); the HTTP-level ones (400, 413,
+415, unknown routes) here. Every error is JSON ``{error_code, error_msg, field}`` with a Nav2 code
+(200 = not a planning failure):
 
 =====  ==================================================================================
 400    malformed JSON, unreadable body
 404    unknown map or robot, unknown route
 413    body larger than ``settings.max_body_bytes``
+415    a body that is not ``application/json``
 422    wrong types, unknown fields, NaN/inf, negative or too long time limits, bad options;
        a plan that failed (start/goal outside or occupied 203–206, timeout 207, no path 208):
        the body is then the failed-result JSON (``status: failed``) the CLI prints

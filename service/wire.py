@@ -1,10 +1,12 @@
 """Wire models: the JSON requests the HTTP API and the Zenoh node accept, as strict Pydantic models.
 
-They are kept apart from the planner's own types (``planner/`` never imports pydantic). Every request
-model forbids unknown fields, rejects wrong types (no "1" for 1, no true for 1) and NaN/±inf, and
-bounds sizes, so a bad request is rejected before it reaches a worker process. Poses are in the
-``map`` frame (metres, radians, yaw counter-clockwise). Response bodies are the plan result JSON of
-docs/contracts.md; their models here only document them in the OpenAPI schema (extra keys allowed).
+They are kept apart from the planner's own types (``planner/`` never imports pydantic) and named apart
+from them (:class:`ReconfigureIn` here, ``planner.spherobot.request.ReconfigureRequest`` there); the
+planning service turns each into the planner's typed objects once. Every request model forbids unknown
+fields, rejects wrong types (no "1" for 1, no true for 1) and NaN/±inf, and bounds sizes, so a bad
+request is rejected before it reaches a worker process. Poses are in the ``map`` frame (metres, radians,
+yaw counter-clockwise). Response bodies are the plan result JSON of docs/contracts.md; their models here
+only document them in the OpenAPI schema (extra keys allowed).
 
 Map and robot names are plain names (letters, digits, ``_``, ``-``, ``.``; no ``/``, no leading dot):
 they are looked up in the maps folder listing and the built-in profiles, never joined onto a path.
