@@ -35,6 +35,7 @@ _EXPORTS: dict[str, str] = {
     "RobotProfileError": "planner.errors",
     "NotFound": "planner.errors",
     "PlanningError": "planner.errors",
+    "BadEndpoint": "planner.errors",
     "StartOutsideMap": "planner.errors",
     "GoalOutsideMap": "planner.errors",
     "StartOccupied": "planner.errors",

@@ -8,8 +8,9 @@ Every failure is typed and says what was wrong and, for bad input, which field::
     │   └── RobotProfileError           a robot profile is malformed
     ├── NotFound(field, msg)            a named map/robot does not exist         (HTTP 404)
     └── PlanningError(code, msg)        planning ran but produced no path        (CLI exit 3/4)
-        ├── StartOutsideMap   203       ├── GoalOutsideMap   204
-        ├── StartOccupied     205       ├── GoalOccupied     206
+        ├── BadEndpoint                 the start or goal is unusable            (CLI exit 2)
+        │   ├── StartOutsideMap 203     ├── GoalOutsideMap 204
+        │   └── StartOccupied   205     └── GoalOccupied   206
         ├── PlannerTimedOut   207       ├── NoValidPathFound 208
         └── PlannerCancelled  200
 
@@ -61,19 +62,23 @@ class PlanningError(SpherePlanError):
         self.expansions = expansions
 
 
-class StartOutsideMap(PlanningError):
+class BadEndpoint(PlanningError):
+    """The start or the goal is outside the map or occupied: the caller's input cannot be planned from."""
+
+
+class StartOutsideMap(BadEndpoint):
     code = 203
 
 
-class GoalOutsideMap(PlanningError):
+class GoalOutsideMap(BadEndpoint):
     code = 204
 
 
-class StartOccupied(PlanningError):
+class StartOccupied(BadEndpoint):
     code = 205
 
 
-class GoalOccupied(PlanningError):
+class GoalOccupied(BadEndpoint):
     code = 206
 
 

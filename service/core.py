@@ -1,58 +1,57 @@
-"""The transport-free planning service: one object that the HTTP app and the Zenoh node both call.
+"""The planning service: :class:`PlanningService`, the one object the HTTP app and the Zenoh node call.
 
-:class:`PlanningService` owns a process pool (planning is CPU-bound), warmed at start-up so the first
-request does not pay for imports and compiled-code loading. Each job carries its own deadline (the
-planner's time limit); at most ``max_in_flight`` jobs are queued or running, beyond that a submit
-raises :class:`ServiceBusy` (HTTP 503 + Retry-After). Each capability is one method here that returns
-a :class:`concurrent.futures.Future` of an :class:`Outcome`: the result JSON (bytes, exactly what the
-CLI prints) and what kind of answer it is, which each transport maps onto its own status.
-
-Bad requests are rejected in the calling process before a job is queued: unknown map or robot
-(:class:`~planner.errors.NotFound`), bad planner options (:class:`~planner.errors.InvalidInput`).
-Map names are looked up in a listing of the maps folder, never joined onto a path, so a request can
-only reach a map file that is in that folder.
-
-Worker processes cache loaded maps and (through :func:`planner.hybrid_astar.plan.plan_path`) Hybrid A*
-planners per (map, robot, options), so repeated queries on a map skip the distance transform.
+Each capability is one ``submit_*`` method: it checks the request against this server (map and robot
+names, limits), builds the planner's own typed objects from it (a :class:`~service.pipeline.PlanQuery`,
+the Spherobot ``ReconfigureRequest``, ``SimulationOptions``, angles in radians) and queues one job of
+:mod:`service.jobs` in a process pool (planning is CPU-bound), returning a future
+:class:`~service.outcome.Outcome`. So a bad request is refused in the calling process before a job is
+queued. The pool is warmed at start-up so the first request does not pay for imports and compiled-code
+loading; each job carries its own deadline (the planner's time limit) and at most ``max_in_flight`` jobs
+are queued or running, beyond that a submit raises :class:`~service.outcome.ServiceBusy`. Map names are
+looked up in a listing of the maps folder, never joined onto a path, so a request can only reach a map
+file that is in that folder.
 """
 
 from __future__ import annotations
 
-import hashlib
-import io
-import json
 import logging
 import math
 import multiprocessing
-import os
 import threading
 import time
-from collections import OrderedDict
 from collections.abc import Callable
 from concurrent.futures import Executor, Future, ProcessPoolExecutor
 from concurrent.futures import TimeoutError as FuturesTimeout
 from concurrent.futures.process import BrokenProcessPool
-from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Literal
+from typing import Any
 
-import numpy as np
-
-from planner.errors import InvalidInput, NotFound, PlanningError, SpherePlanError
+from planner.errors import InvalidInput, NotFound, SpherePlanError
 from planner.hybrid_astar.search import PlannerOptions
-from planner.maps.catalogue import default_maps_dir, list_maps
-from planner.maps.catalogue import map_files as map_index
+from planner.maps.catalogue import default_maps_dir, list_maps, map_files
 from planner.maps.nav2 import MESH_SUFFIXES
 from planner.occupancy import OccupancyGrid
-from planner.result import failure_json
 from planner.robot import DEFAULT_ROBOT, builtin_robots, load_robot
-from service.pipeline import execute_plan
+from planner.spherobot.request import ReconfigureRequest
+from service.grids import grid_png, load_map_file
+from service.jobs import (
+    plan_job,
+    reconfigure_job,
+    simulate_job,
+    tensegrity_static_job,
+    vpip_rods_job,
+    vpip_schedule_job,
+    warm_up_job,
+    worker_init,
+)
+from service.outcome import Outcome, ServiceBusy, error_outcome, outcome_of_exception
+from service.pipeline import PlanQuery
+from service.settings import ServiceSettings
 from service.wire import (
-    MAX_INLINE_CELLS,
-    MAX_TIME_LIMIT_S,
+    InlineGrid,
     PlanIn,
     PlanRequest,
-    ReconfigureRequest,
+    ReconfigureIn,
     SimulateRequest,
     TensegrityStaticRequest,
     VpipRodsRequest,
@@ -61,299 +60,12 @@ from service.wire import (
 
 log = logging.getLogger(__name__)
 
-#: Nav2 ComputePathToPose UNKNOWN: the code of every error that is not a planning failure
-UNKNOWN_ERROR_CODE = 200
 #: farthest reconfiguration goal, in sphere radii from the start (paper 004's examples are a few radii)
 MAX_RECONFIGURE_RADII = 200
 
-Kind = Literal["ok", "bad_input", "not_found", "failed", "busy", "internal"]
 
-
-@dataclass(frozen=True)
-class ServiceSettings:
-    """Everything the service, the HTTP app and the Zenoh node are configured with, validated once.
-
-    ``maps_dir`` None means the shipped maps (:func:`planner.maps.catalogue.default_maps_dir`).
-    ``max_in_flight`` 0 means 4 jobs per worker. ``zenoh_listen`` is the default peer's only endpoint
-    (ignored when ``zenoh_config`` names a Zenoh config file). ``max_body_bytes`` bounds HTTP bodies.
-    """
-
-    maps_dir: Path | None = None
-    workers: int = 2
-    max_in_flight: int = 0
-    max_time_limit_s: float = MAX_TIME_LIMIT_S
-    max_inline_cells: int = MAX_INLINE_CELLS
-    max_body_bytes: int = 4_000_000
-    retry_after_s: int = 1
-    warm_up: bool = True
-    zenoh: bool = True
-    zenoh_config: Path | None = None
-    zenoh_listen: str = "tcp/127.0.0.1:7447"
-
-    def __post_init__(self) -> None:
-        def need(ok: bool, name: str, msg: str) -> None:
-            if not ok:
-                raise InvalidInput(name, msg)
-
-        need(1 <= self.workers <= 64, "workers", f"must be in [1, 64], got {self.workers}")
-        need(self.max_in_flight >= 0, "max_in_flight", f"must be ≥ 0 (0 = 4 per worker), got {self.max_in_flight}")
-        need(math.isfinite(self.max_time_limit_s) and 0 < self.max_time_limit_s <= MAX_TIME_LIMIT_S,
-             "max_time_limit_s", f"must be in (0, {MAX_TIME_LIMIT_S:g}], got {self.max_time_limit_s}")
-        need(1 <= self.max_inline_cells <= MAX_INLINE_CELLS, "max_inline_cells",
-             f"must be in [1, {MAX_INLINE_CELLS}], got {self.max_inline_cells}")
-        need(self.max_body_bytes >= 1024, "max_body_bytes", f"must be ≥ 1024, got {self.max_body_bytes}")
-        need(self.retry_after_s >= 1, "retry_after_s", f"must be ≥ 1, got {self.retry_after_s}")
-        if self.zenoh_config is not None:
-            need(Path(self.zenoh_config).is_file(), "zenoh_config", f"{self.zenoh_config} is not a file")
-
-    @property
-    def in_flight_cap(self) -> int:
-        return self.max_in_flight or 4 * self.workers
-
-
-@dataclass(frozen=True)
-class Outcome:
-    """The answer to one request: ``body`` is the JSON (UTF-8 bytes) every transport sends unchanged.
-
-    ``kind``: ``ok``; ``bad_input`` (HTTP 422); ``not_found`` (404); ``failed`` — planning ran and found
-    no path, body = the failed-result JSON with the Nav2 code (422); ``busy`` (503); ``internal`` (500).
-    """
-
-    kind: Kind
-    body: bytes
-    error_code: int = 0
-
-    @property
-    def ok(self) -> bool:
-        return self.kind == "ok"
-
-    def json(self) -> Any:
-        return json.loads(self.body)
-
-
-def _dumps(data: Any) -> bytes:
-    return json.dumps(data, allow_nan=False, separators=(",", ":")).encode()
-
-
-def error_outcome(kind: Kind, msg: str, field: str | None = None, code: int = UNKNOWN_ERROR_CODE) -> Outcome:
-    """An error answer: ``{error_code, error_msg, field}``."""
-    return Outcome(kind, _dumps({"error_code": code, "error_msg": msg, "field": field}), code)
-
-
-def outcome_of_exception(exc: BaseException, robot_json: Any = None, plan: bool = True) -> Outcome:
-    """Map a sphereplan error onto an :class:`Outcome` (the same mapping everywhere). A planning failure
-    of ``/v1/plan`` (``plan``) carries the failed plan-result JSON; of other capabilities
-    ``{status: failed, error_code, error_msg, field: null}``."""
-    if isinstance(exc, PlanningError):
-        if not plan:
-            body = {"status": "failed", "error_code": exc.code, "error_msg": exc.msg, "field": None}
-            return Outcome("failed", _dumps(body), exc.code)
-        body = failure_json(exc.code, exc.msg, None, exc.planning_time_s, exc.expansions)
-        body["robot"] = robot_json
-        return Outcome("failed", _dumps(body), exc.code)
-    if isinstance(exc, NotFound):
-        return error_outcome("not_found", str(exc), exc.field)
-    if isinstance(exc, InvalidInput):
-        return error_outcome("bad_input", str(exc), exc.field)
-    if isinstance(exc, SpherePlanError):
-        return error_outcome("bad_input", str(exc))
-    return error_outcome("internal", f"internal error: {type(exc).__name__}: {exc}")
-
-
-class ServiceBusy(Exception):
-    """Too many jobs in flight; retry after ``retry_after_s`` seconds."""
-
-    def __init__(self, in_flight: int, retry_after_s: int) -> None:
-        super().__init__(f"the planner is busy ({in_flight} jobs in flight); retry in {retry_after_s} s")
-        self.retry_after_s = retry_after_s
-
-    def outcome(self) -> Outcome:
-        return error_outcome("busy", str(self))
-
-
-# ---------------------------------------------------------------------------------------- map catalogue
-
-
-_GRIDS: OrderedDict[tuple[Any, ...], OccupancyGrid] = OrderedDict()
-_GRID_CACHE_SIZE = 8
-_GRID_LOCK = threading.Lock()
-
-
-def _cached(key: tuple[Any, ...], make: Callable[[], OccupancyGrid]) -> OccupancyGrid:
-    with _GRID_LOCK:
-        grid = _GRIDS.get(key)
-        if grid is not None:
-            _GRIDS.move_to_end(key)
-            return grid
-    grid = make()
-    with _GRID_LOCK:
-        _GRIDS[key] = grid
-        while len(_GRIDS) > _GRID_CACHE_SIZE:
-            _GRIDS.popitem(last=False)
-    return grid
-
-
-def load_map_file(path: Path, robot_name: str | None) -> OccupancyGrid:
-    """A map file as a grid, cached per (file, modification time[, robot for meshes])."""
-    from planner.maps.load import load_any
-
-    stat = path.stat()
-    mesh = path.suffix.lower() in MESH_SUFFIXES
-    key = ("file", str(path), stat.st_mtime_ns, stat.st_size, robot_name if mesh else None)
-    return _cached(key, lambda: load_any(path, load_robot(robot_name) if mesh else None))
-
-
-def inline_grid(spec: dict[str, Any]) -> OccupancyGrid:
-    """An :class:`OccupancyGrid` from the inline-grid JSON of :class:`service.wire.InlineGrid` (cached
-    by content, so repeated inline requests reuse the planner built for it)."""
-    data = np.asarray(spec["data"], dtype=np.int8)
-    origin = tuple(float(v) for v in spec["origin"])
-    digest = hashlib.sha1(data.tobytes()).hexdigest()
-    key = ("inline", digest, data.shape, float(spec["resolution_m"]), origin, spec["name"])
-    return _cached(key, lambda: OccupancyGrid(data=data, resolution_m=float(spec["resolution_m"]),
-                                              origin=origin, name=str(spec["name"])))  # type: ignore[arg-type]
-
-
-def grid_png(grid: OccupancyGrid) -> bytes:
-    """The grid as a greyscale PNG the way map_server images look: free white, occupied black,
-    unknown grey, image row 0 at the top."""
-    from PIL import Image
-
-    data = grid.data
-    pixels = np.where(data < 0, 205, 254 - (np.clip(data, 0, 100).astype(np.int32) * 254) // 100).astype(np.uint8)
-    buf = io.BytesIO()
-    Image.fromarray(pixels[::-1], mode="L").save(buf, format="PNG")
-    return buf.getvalue()
-
-
-# ------------------------------------------------------------------------------------- worker side
-
-
-def _worker_init() -> None:
-    """Runs once in each worker process: import the planner (and its compiled code) up front."""
-    logging.basicConfig(level=logging.WARNING, format="%(levelname)s worker %(process)d %(message)s")
-    import planner.hybrid_astar.plan  # noqa: F401
-
-
-def warm_up_job() -> int:
-    """Plan once on a small synthetic map so that compiled code is loaded before the first request."""
-    from planner.hybrid_astar.plan import plan_path
-
-    occupied = np.zeros((50, 80), dtype=bool)
-    occupied[[0, -1], :] = True
-    occupied[:, [0, -1]] = True
-    occupied[:15, 40] = True
-    grid = OccupancyGrid.from_occupied(occupied, 0.1, name="warm-up")
-    robot = load_robot(None)
-    try:
-        plan_path(grid, robot, (1.5, 1.0, 0.0), (6.5, 1.0, 0.0), time_limit_s=MAX_TIME_LIMIT_S)
-    except PlanningError as exc:  # still warm: the compiled code ran
-        log.warning("warm-up plan failed: %s", exc)
-    return os.getpid()
-
-
-def plan_job(request: dict[str, Any], map_path: str | None) -> Outcome:
-    """Run one plan request (the JSON of a validated :class:`PlanRequest`) in a worker process.
-
-    The same pipeline as ``sphereplan plan``: load the robot and the map, then
-    :func:`service.pipeline.execute_plan`.
-    """
-    robot_json = None
-    try:
-        robot = load_robot(request.get("robot"))
-        robot_json = robot.to_json()
-        grid = load_map_file(Path(map_path), request.get("robot")) if map_path is not None else inline_grid(
-            request["map"])
-        result = execute_plan(request, grid, robot)
-        return Outcome("ok", _dumps(result.to_json()))
-    except SpherePlanError as exc:
-        return outcome_of_exception(exc, robot_json)
-    except (ValueError, ArithmeticError) as exc:  # see _job
-        log.warning("plan: computation failed for a request", exc_info=True)
-        return error_outcome("bad_input", f"the plan computation failed for this input: {type(exc).__name__}: {exc}")
-    except Exception as exc:  # a bug, not the client's fault: log it and answer 500
-        log.exception("plan job failed")
-        return outcome_of_exception(exc)
-
-
-def simulate_job(request: dict[str, Any], map_path: str | None, robot_name: str) -> Outcome:
-    """Run one simulate request in a worker: ``simulate_plan`` with the options of ``sphereplan simulate``."""
-    from planner.closed_loop.simulate import SimulationOptions, simulate_plan
-    from planner.closed_loop.tracker import MPCParams
-
-    def compute() -> dict[str, Any]:
-        grid = load_map_file(Path(map_path), None) if map_path is not None else inline_grid(request["map"])
-        options = SimulationOptions(control_rate_hz=request["rate_hz"], tracker=request["tracker"],
-                                    mpc=MPCParams(horizon=request["horizon"]), time_limit_s=request["time_limit_s"])
-        return simulate_plan(grid, request["path"], load_robot(robot_name), seed=request["seed"],
-                             noise=request["noise"], options=options)
-
-    return _job("simulate", compute)
-
-
-def _job(name: str, compute: Callable[[], Any]) -> Outcome:
-    """Run one capability's computation: its JSON, or the error outcome.
-
-    A ``ValueError``/``ArithmeticError`` that is not a sphereplan error means the request's numbers took
-    the computation outside its domain (or produced NaN): answered as bad input (422), logged with the
-    traceback so the unchecked case can be turned into a named error in ``planner/``.
-    """
-    try:
-        return Outcome("ok", _dumps(compute()))
-    except SpherePlanError as exc:
-        return outcome_of_exception(exc, plan=False)
-    except (ValueError, ArithmeticError) as exc:
-        log.warning("%s: computation failed for a request", name, exc_info=True)
-        return error_outcome("bad_input", f"the {name} computation failed for this input: {type(exc).__name__}: {exc}")
-    except Exception as exc:
-        log.exception("%s job failed", name)
-        return outcome_of_exception(exc)
-
-
-def _radians(request: dict[str, Any], key: str) -> float:
-    return math.radians(request[key]) if request["degrees"] else float(request[key])
-
-
-def tensegrity_static_job(request: dict[str, Any]) -> Outcome:
-    """``static_equilibria`` in a worker (what ``sphereplan tensegrity static`` prints)."""
-    from planner.tensegrity import static_equilibria
-
-    return _job("tensegrity", lambda: static_equilibria(
-        _radians(request, "theta1"), _radians(request, "theta2"), load_robot(request["robot"]), request["verify"]))
-
-
-def reconfigure_job(request: dict[str, Any], map_path: str | None) -> Outcome:
-    """``plan_reconfiguration`` in a worker (what ``sphereplan reconfigure`` prints)."""
-    from planner.spherobot.reconfigure import plan_reconfiguration
-
-    def compute() -> dict[str, Any]:
-        grid = None
-        if map_path is not None:
-            grid = load_map_file(Path(map_path), None)
-        elif request["map"] is not None:
-            grid = inline_grid(request["map"])
-        return plan_reconfiguration({k: v for k, v in request.items() if k != "map"}, grid=grid)
-
-    return _job("reconfigure", compute)
-
-
-def vpip_rods_job(request: dict[str, Any]) -> Outcome:
-    """``rods_report`` in a worker (what ``sphereplan vpip rods`` prints)."""
-    from planner.vpip.api import rods_report
-
-    return _job("vpip rods", lambda: rods_report(
-        _radians(request, "phi_vpip"), _radians(request, "theta_vpip"), _radians(request, "roll"),
-        _radians(request, "pitch_phase"), request["robot"]))
-
-
-def vpip_schedule_job(request: dict[str, Any], robot_name: str) -> Outcome:
-    """``schedule_report`` in a worker (the series ``sphereplan vpip schedule --out`` writes)."""
-    from planner.vpip.api import schedule_report
-
-    return _job("vpip schedule", lambda: schedule_report(request["path"], robot_name, request["driver"]))
-
-
-# ------------------------------------------------------------------------------------------ service
+def _radians(angle: float, degrees: bool) -> float:
+    return math.radians(angle) if degrees else float(angle)
 
 
 class PlanningService:
@@ -382,7 +94,7 @@ class PlanningService:
     def _process_pool(workers: int) -> Executor:
         # spawn, not fork: the parent runs threads (Zenoh, the event loop) that fork would copy mid-flight
         return ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("spawn"),
-                                   initializer=_worker_init)
+                                   initializer=worker_init)
 
     def start(self) -> None:
         """Open the pool and, if ``settings.warm_up``, run one warm-up job per worker (blocking)."""
@@ -441,7 +153,7 @@ class PlanningService:
             with self._lock:
                 self._in_flight -= 1
             if job.cancelled():
-                outer.set_result(error_outcome("busy", "the service is shutting down"))
+                outer.set_result(error_outcome(ServiceBusy, "the service is shutting down"))
                 return
             exc = job.exception()
             if exc is None:
@@ -449,7 +161,7 @@ class PlanningService:
             elif isinstance(exc, BrokenProcessPool):
                 log.error("a worker process died: %s; restarting the pool", exc)
                 self._restart_pool(executor)
-                outer.set_result(error_outcome("internal", "a worker process died while planning"))
+                outer.set_result(error_outcome(BrokenProcessPool, "a worker process died while planning"))
             else:
                 outer.set_result(outcome_of_exception(exc))
 
@@ -472,7 +184,7 @@ class PlanningService:
 
     def resolve_map(self, name: str) -> Path:
         """The file of map ``name`` in the maps folder, or :class:`NotFound`."""
-        index = map_index(self.maps_dir)
+        index = map_files(self.maps_dir)
         path = index.get(name)
         if path is None:
             shown = ", ".join(sorted(index)) or "none"
@@ -485,28 +197,30 @@ class PlanningService:
             raise NotFound("robot", f"unknown robot {name!r}; built-in: {', '.join(builtin_robots())}")
 
     def submit_plan(self, request: PlanRequest) -> Future[Outcome]:
-        """Validate ``request`` against this service (map, robot, options, limits) and queue the plan.
+        """Check ``request`` against this service (robot, options, limits, map) and queue the plan.
 
         Raises :class:`NotFound`/:class:`InvalidInput` for a bad request and :class:`ServiceBusy`.
         """
         self.resolve_robot(request.robot)
-        PlannerOptions.from_dict(dict(request.options or {}))
-        if request.time_limit_s is not None and request.time_limit_s > self.settings.max_time_limit_s:
-            raise InvalidInput("time_limit_s", f"must be ≤ {self.settings.max_time_limit_s:g} s on this server")
-        options_limit = (request.options or {}).get("time_limit_s")
-        if isinstance(options_limit, int | float) and options_limit > self.settings.max_time_limit_s:
-            raise InvalidInput("options.time_limit_s", f"must be ≤ {self.settings.max_time_limit_s:g} s on this server")
-        return self._submit(plan_job, request.request_json(), self._map_argument(request.map))
+        options = request.options or {}
+        query = PlanQuery(request.start.as_pose(), request.goal.as_pose(), PlannerOptions.from_dict(options),
+                          request.time_limit_s)
+        limit = self.settings.max_time_limit_s
+        if query.time_limit_s is not None and query.time_limit_s > limit:
+            raise InvalidInput("time_limit_s", f"must be ≤ {limit:g} s on this server")
+        if "time_limit_s" in options and query.options.time_limit_s > limit:
+            raise InvalidInput("options.time_limit_s", f"must be ≤ {limit:g} s on this server")
+        return self._submit(plan_job, query, request.robot, self._map_source(request.map))
 
-    def _map_argument(self, map_spec: str | Any) -> str | None:
-        """The file of a named map (checked now), or None for an inline grid (size checked now)."""
+    def _map_source(self, map_spec: str | InlineGrid) -> Path | InlineGrid:
+        """The file of a named map (checked now), or the inline grid (size checked now)."""
         if isinstance(map_spec, str):
-            return str(self.resolve_map(map_spec))
+            return self.resolve_map(map_spec)
         cells = len(map_spec.data) * len(map_spec.data[0])
         if cells > self.settings.max_inline_cells:
             limit = self.settings.max_inline_cells
             raise InvalidInput("map.data", f"{cells} cells; this server accepts at most {limit}")
-        return None
+        return map_spec
 
     def _plan_robot(self, robot: str | None, path: PlanIn, default: str) -> str:
         """The robot a plan-consuming request uses: its own, else the plan's (built-in only), else ``default``."""
@@ -520,54 +234,58 @@ class PlanningService:
 
     def submit_simulate(self, request: SimulateRequest) -> Future[Outcome]:
         """Queue a closed-loop simulation of ``request.path`` (robot: the request's, else the plan's)."""
-        robot = self._plan_robot(request.robot, request.path, DEFAULT_ROBOT)
-        return self._submit(simulate_job, request.request_json(), self._map_argument(request.map), robot)
+        from planner.closed_loop.simulate import SimulationOptions
+        from planner.closed_loop.tracker import MPCParams
 
-    def submit_reconfigure(self, request: ReconfigureRequest) -> Future[Outcome]:
+        robot = self._plan_robot(request.robot, request.path, DEFAULT_ROBOT)
+        options = SimulationOptions(control_rate_hz=request.rate_hz, tracker=request.tracker,
+                                    mpc=MPCParams(horizon=request.horizon), time_limit_s=request.time_limit_s)
+        return self._submit(simulate_job, request.path.model_dump(mode="json"), self._map_source(request.map), robot,
+                            request.seed, request.noise, options)
+
+    def submit_reconfigure(self, request: ReconfigureIn) -> Future[Outcome]:
         """Queue a Spherobot reconfiguration (optionally checked against a map). The goal may be at most
         ``MAX_RECONFIGURE_RADII`` sphere radii from the start: the rolled result is sampled along the way,
         so its size and cost grow with distance / radius."""
-        from planner.spherobot.reconfigure import ROBOT
-
-        radius = request.radius_m if request.radius_m is not None else load_robot(ROBOT).radius_m
-        distance = math.dist(request.start, request.goal)
-        if distance > MAX_RECONFIGURE_RADII * radius:
+        problem = ReconfigureRequest.from_dict(request.model_dump(exclude={"map"}))
+        assert problem.radius_m is not None
+        distance, farthest = math.dist(problem.start, problem.goal), MAX_RECONFIGURE_RADII * problem.radius_m
+        if distance > farthest:
             raise InvalidInput("goal", f"is {distance:.3g} m from the start; this server rolls at most "
-                                       f"{MAX_RECONFIGURE_RADII} sphere radii ({MAX_RECONFIGURE_RADII * radius:.3g} m)")
-        map_path = None if request.map is None else self._map_argument(request.map)
-        return self._submit(reconfigure_job, request.request_json(), map_path)
+                                       f"{MAX_RECONFIGURE_RADII} sphere radii ({farthest:.3g} m)")
+        return self._submit(reconfigure_job, problem, None if request.map is None else self._map_source(request.map))
 
     def submit_vpip_rods(self, request: VpipRodsRequest) -> Future[Outcome]:
         """Queue one eq. 18 rod-length evaluation."""
         self.resolve_robot(request.robot)
-        return self._submit(vpip_rods_job, request.request_json())
+        angles = (request.phi_vpip, request.theta_vpip, request.roll, request.pitch_phase)
+        return self._submit(vpip_rods_job, *(_radians(a, request.degrees) for a in angles), request.robot)
 
     def submit_vpip_schedule(self, request: VpipScheduleRequest) -> Future[Outcome]:
         """Queue a 100 Hz VPIP schedule along ``request.path`` (robot: the request's, the plan's, daedalus)."""
         robot = self._plan_robot(request.robot, request.path, "daedalus")
-        return self._submit(vpip_schedule_job, request.request_json(), robot)
+        return self._submit(vpip_schedule_job, request.path.model_dump(mode="json"), robot, request.driver)
 
     def submit_tensegrity_static(self, request: TensegrityStaticRequest) -> Future[Outcome]:
         """Queue the TeXploR static-state computation."""
         self.resolve_robot(request.robot)
-        return self._submit(tensegrity_static_job, request.request_json())
+        return self._submit(tensegrity_static_job, _radians(request.theta1, request.degrees),
+                            _radians(request.theta2, request.degrees), request.robot, request.verify)
 
     def plan(self, request: PlanRequest, timeout_s: float | None = None) -> Outcome:
         """Blocking plan: the :class:`Outcome`, with request errors and busy mapped to outcomes too."""
         try:
             return self.submit_plan(request).result(timeout=timeout_s)
         except FuturesTimeout:
-            return error_outcome("busy", f"no answer within {timeout_s} s (the plan keeps its worker until its "
+            return error_outcome(ServiceBusy, f"no answer within {timeout_s} s (the plan keeps its worker until its "
                                  "own time limit ends)")
-        except ServiceBusy as exc:
-            return exc.outcome()
-        except SpherePlanError as exc:
+        except (ServiceBusy, SpherePlanError) as exc:
             return outcome_of_exception(exc)
 
     def maps(self) -> list[dict[str, Any]]:
         """Every map a request may name (:func:`planner.maps.catalogue.list_maps` entries: name, file, kind, size_m,
         resolution_m); where a grid YAML and a mesh share a name, the YAML is the one served."""
-        index = map_index(self.maps_dir)
+        index = map_files(self.maps_dir)
         return [entry for entry in list_maps(self.maps_dir) if index.get(entry["name"], Path()).name == entry["file"]]
 
     def map_grid(self, name: str) -> OccupancyGrid:

@@ -1,13 +1,17 @@
 """The HTTP API: a thin FastAPI adapter over :class:`service.core.PlanningService`.
 
 ``create_app(settings)`` builds the app; its lifespan opens the warmed process pool and the Zenoh node
-and closes both on shutdown. One router per resource (health, plan, maps, robots). Every error is JSON
-``{error_code, error_msg, field}`` with a Nav2 code (200 = not a planning failure):
+and closes both on shutdown. One router per resource (health, plan, simulate, reconfigure, vpip,
+tensegrity, maps, robots); every job route answers through :func:`answer`. An error raised by the
+service is answered as the outcome table says (:mod:`service.outcome`); the HTTP-level ones (400, 413,
+415, unknown routes) here. Every error is JSON ``{error_code, error_msg, field}`` with a Nav2 code
+(200 = not a planning failure):
 
 =====  ==================================================================================
 400    malformed JSON, unreadable body
 404    unknown map or robot, unknown route
 413    body larger than ``settings.max_body_bytes``
+415    a body that is not ``application/json``
 422    wrong types, unknown fields, NaN/inf, negative or too long time limits, bad options;
        a plan that failed (start/goal outside or occupied 203–206, timeout 207, no path 208):
        the body is then the failed-result JSON (``status: failed``) the CLI prints
@@ -21,19 +25,22 @@ from __future__ import annotations
 
 import asyncio
 import logging
-from collections.abc import AsyncIterator
+from collections.abc import AsyncIterator, Callable
+from concurrent.futures import Future
 from contextlib import asynccontextmanager
-from typing import Annotated, Any
+from typing import Annotated, Any, TypeVar
 
 from fastapi import APIRouter, Depends, FastAPI, Request
 from fastapi import Path as PathParam
 from fastapi.exceptions import RequestValidationError
 from fastapi.responses import JSONResponse, Response
+from pydantic import BaseModel
 from starlette.exceptions import HTTPException as StarletteHTTPException
 from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
-from planner.errors import InvalidInput, NotFound, SpherePlanError
-from service.core import UNKNOWN_ERROR_CODE, Outcome, PlanningService, ServiceBusy, ServiceSettings
+from service.core import PlanningService
+from service.outcome import ANSWERS, Outcome, error_body, outcome_of_exception
+from service.settings import ServiceSettings
 from service.wire import (
     NAME_PATTERN,
     ErrorBody,
@@ -41,29 +48,37 @@ from service.wire import (
     MapInfo,
     PlanRequest,
     PlanResultOut,
-    ReconfigureRequest,
+    ReconfigureIn,
     RobotInfo,
     SimulateRequest,
     TensegrityStaticRequest,
     VpipRodsRequest,
     VpipScheduleRequest,
-    describe_errors,
+    invalid_input,
 )
 
 log = logging.getLogger(__name__)
 
-STATUS = {"ok": 200, "bad_input": 422, "not_found": 404, "failed": 422, "busy": 503, "internal": 500}
 JSON = "application/json"
+M = TypeVar("M", bound=BaseModel)
 
 
 def _error(status: int, msg: str, field: str | None = None, headers: dict[str, str] | None = None) -> JSONResponse:
-    return JSONResponse({"error_code": UNKNOWN_ERROR_CODE, "error_msg": msg, "field": field}, status, headers)
+    """An HTTP-level error (malformed body, unknown route, ...) with the service's error body."""
+    return JSONResponse(error_body(msg, field), status, headers)
 
 
 def outcome_response(outcome: Outcome, retry_after_s: int = 1) -> Response:
-    """An :class:`Outcome` as an HTTP response; the body bytes are sent as they are."""
+    """An :class:`Outcome` as an HTTP response with its row's status; the body bytes are sent as they are."""
     headers = {"Retry-After": str(retry_after_s)} if outcome.kind == "busy" else None
-    return Response(outcome.body, STATUS[outcome.kind], headers, media_type=JSON)
+    return Response(outcome.body, outcome.answer.http_status, headers, media_type=JSON)
+
+
+async def answer(service: PlanningService, submit: Callable[[M], Future[Outcome]], body: M) -> Response:
+    """What every job route does: queue ``body`` with ``submit`` (off the event loop: it checks the request
+    and may list the maps folder), wait for the job without blocking the loop, answer its outcome."""
+    future = await asyncio.to_thread(submit, body)
+    return outcome_response(await asyncio.wrap_future(future), service.settings.retry_after_s)
 
 
 class BodyLimit:
@@ -160,8 +175,7 @@ async def post_plan(body: PlanRequest, service: Service) -> Response:
     """Plan a rollable path from ``start`` to ``goal`` on a named map (or an inline grid, at most
     ``max_inline_cells`` cells). Answers the plan result JSON — the same object ``sphereplan plan``
     prints. A failed plan answers 422 with the failed-result JSON and its Nav2 code."""
-    future = await asyncio.to_thread(service.submit_plan, body)
-    return outcome_response(await asyncio.wrap_future(future), service.settings.retry_after_s)
+    return await answer(service, service.submit_plan, body)
 
 
 simulate = APIRouter(prefix="/v1", tags=["simulate"])
@@ -172,20 +186,18 @@ async def post_simulate(body: SimulateRequest, service: Service) -> Response:
     """Roll a plan (the result of ``/v1/plan``) in closed loop on a map: simulator, odometry/GNSS fusion
     and the MPC tracker of paper 001. Answers the SIM.json object ``sphereplan simulate`` writes
     (``trajectory``, ``estimate``, ``odometry``, ``gnss``, ``commands``, ``metrics``)."""
-    future = await asyncio.to_thread(service.submit_simulate, body)
-    return outcome_response(await asyncio.wrap_future(future), service.settings.retry_after_s)
+    return await answer(service, service.submit_simulate, body)
 
 
 reconfigure = APIRouter(prefix="/v1", tags=["reconfigure"])
 
 
 @reconfigure.post("/reconfigure", responses=ERRORS)
-async def post_reconfigure(body: ReconfigureRequest, service: Service) -> Response:
+async def post_reconfigure(body: ReconfigureIn, service: Service) -> Response:
     """Spherobot reconfiguration (paper 004): reach ``goal`` with the camera point P on top (and, with
     ``goal_heading``, a heading), proved by rolling the sphere through SO(3). What ``sphereplan
     reconfigure`` prints; with ``map`` the swept sphere is checked against it (failures 203–206, 208)."""
-    future = await asyncio.to_thread(service.submit_reconfigure, body)
-    return outcome_response(await asyncio.wrap_future(future), service.settings.retry_after_s)
+    return await answer(service, service.submit_reconfigure, body)
 
 
 vpip = APIRouter(prefix="/v1/vpip", tags=["vpip"])
@@ -195,16 +207,14 @@ vpip = APIRouter(prefix="/v1/vpip", tags=["vpip"])
 async def post_vpip_rods(body: VpipRodsRequest, service: Service) -> Response:
     """Eq. 18 length of every rod of a rod-driven sphere (paper 000) for one VPIP plane, roll and pitch
     phase: what ``sphereplan vpip rods`` prints."""
-    future = await asyncio.to_thread(service.submit_vpip_rods, body)
-    return outcome_response(await asyncio.wrap_future(future), service.settings.retry_after_s)
+    return await answer(service, service.submit_vpip_rods, body)
 
 
 @vpip.post("/schedule", responses=ERRORS)
 async def post_vpip_schedule(body: VpipScheduleRequest, service: Service) -> Response:
     """The 100 Hz VPIP cascade along a plan: plane angles and rod lengths per tick, the series
     ``sphereplan vpip schedule --out`` writes."""
-    future = await asyncio.to_thread(service.submit_vpip_schedule, body)
-    return outcome_response(await asyncio.wrap_future(future), service.settings.retry_after_s)
+    return await answer(service, service.submit_vpip_schedule, body)
 
 
 tensegrity = APIRouter(prefix="/v1/tensegrity", tags=["tensegrity"])
@@ -214,8 +224,7 @@ tensegrity = APIRouter(prefix="/v1/tensegrity", tags=["tensegrity"])
 async def post_tensegrity_static(body: TensegrityStaticRequest, service: Service) -> Response:
     """The four hybrid static states of the TeXploR two-arc robot (paper 002) for slider angles θ1, θ2:
     what ``sphereplan tensegrity static`` prints."""
-    future = await asyncio.to_thread(service.submit_tensegrity_static, body)
-    return outcome_response(await asyncio.wrap_future(future), service.settings.retry_after_s)
+    return await answer(service, service.submit_tensegrity_static, body)
 
 
 maps = APIRouter(prefix="/v1", tags=["maps"])
@@ -259,35 +268,23 @@ def install_error_handlers(app: FastAPI) -> None:
         if not (content_type == JSON or content_type.endswith("+json")):
             return _error(415, f"Content-Type must be {JSON}, got {content_type!r}", "content-type")
         errors = list(exc.errors())
-        field, msg = describe_errors(errors)
+        error = invalid_input(errors)
         malformed = any(e.get("type") == "json_invalid" for e in errors)
-        return _error(400 if malformed else 422, msg, field)
+        return _error(400 if malformed else 422, str(error), error.field)
 
     @app.exception_handler(StarletteHTTPException)
     async def http_error(request: Request, exc: StarletteHTTPException) -> JSONResponse:
         return _error(exc.status_code, str(exc.detail), headers=getattr(exc, "headers", None))
 
-    @app.exception_handler(ServiceBusy)
-    async def busy(request: Request, exc: ServiceBusy) -> Response:
-        return outcome_response(exc.outcome(), exc.retry_after_s)
+    async def refused(request: Request, exc: Exception) -> Response:
+        outcome = outcome_of_exception(exc)
+        if outcome.kind == "internal":
+            log.error("unhandled error on %s %s", request.method, request.url.path, exc_info=exc)
+        return outcome_response(outcome, get_service(request).settings.retry_after_s)
 
-    @app.exception_handler(NotFound)
-    async def not_found(request: Request, exc: NotFound) -> JSONResponse:
-        return _error(404, str(exc), exc.field)
-
-    @app.exception_handler(InvalidInput)
-    async def bad_input(request: Request, exc: InvalidInput) -> JSONResponse:
-        return _error(422, str(exc), exc.field)
-
-    @app.exception_handler(SpherePlanError)
-    async def other(request: Request, exc: SpherePlanError) -> JSONResponse:
-        return _error(422, str(exc))
-
-    @app.exception_handler(Exception)
-    async def bug(request: Request, exc: Exception) -> JSONResponse:
-        log.exception("unhandled error on %s %s", request.method, request.url.path)
-        return JSONResponse({"error_code": UNKNOWN_ERROR_CODE, "error_msg": f"internal error: {type(exc).__name__}",
-                             "field": None}, 500)
+    # one handler for every row of the outcome table; the catch-all row is Starlette's last resort (Exception)
+    for error in ANSWERS:
+        app.add_exception_handler(error if issubclass(error, Exception) else Exception, refused)
 
 
 def create_app(settings: ServiceSettings | None = None, service: PlanningService | None = None) -> FastAPI:

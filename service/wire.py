@@ -1,10 +1,12 @@
 """Wire models: the JSON requests the HTTP API and the Zenoh node accept, as strict Pydantic models.
 
-They are kept apart from the planner's own types (``planner/`` never imports pydantic). Every request
-model forbids unknown fields, rejects wrong types (no "1" for 1, no true for 1) and NaN/±inf, and
-bounds sizes, so a bad request is rejected before it reaches a worker process. Poses are in the
-``map`` frame (metres, radians, yaw counter-clockwise). Response bodies are the plan result JSON of
-docs/contracts.md; their models here only document them in the OpenAPI schema (extra keys allowed).
+They are kept apart from the planner's own types (``planner/`` never imports pydantic) and named apart
+from them (:class:`ReconfigureIn` here, ``planner.spherobot.request.ReconfigureRequest`` there); the
+planning service turns each into the planner's typed objects once. Every request model forbids unknown
+fields, rejects wrong types (no "1" for 1, no true for 1) and NaN/±inf, and bounds sizes, so a bad
+request is rejected before it reaches a worker process. Poses are in the ``map`` frame (metres, radians,
+yaw counter-clockwise). Response bodies are the plan result JSON of docs/contracts.md; their models here
+only document them in the OpenAPI schema (extra keys allowed).
 
 Map and robot names are plain names (letters, digits, ``_``, ``-``, ``.``; no ``/``, no leading dot):
 they are looked up in the maps folder listing and the built-in profiles, never joined onto a path.
@@ -19,10 +21,8 @@ from typing import Annotated, Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 
-#: largest inline grid accepted by ``POST /v1/plan`` (cells); also capped by the HTTP body limit
-MAX_INLINE_CELLS = 250_000
-#: largest time limit a request may ask for (s); a server may set a lower one
-MAX_TIME_LIMIT_S = 60.0
+from planner.errors import InvalidInput
+from service.settings import MAX_INLINE_CELLS, MAX_TIME_LIMIT_S
 
 #: longest plan ``/v1/simulate`` accepts (states; 20 000 × 4 cm = 800 m)
 MAX_PLAN_STATES = 20_000
@@ -54,6 +54,9 @@ class PoseIn(_Strict):
     x: Metres
     y: Metres
     yaw: Angle = Field(description="rad, counter-clockwise from +x")
+
+    def as_pose(self) -> tuple[float, float, float]:
+        return self.x, self.y, self.yaw
 
 
 class InlineGrid(_Strict):
@@ -90,10 +93,6 @@ class PlanRequest(_Strict):
     options: dict[Annotated[str, Field(max_length=64)], OptionValue] | None = Field(
         default=None, max_length=64, description="planner options (PlannerOptions field names)"
     )
-
-    def request_json(self) -> dict[str, Any]:
-        """The request as plain JSON data (what crosses into a worker process)."""
-        return self.model_dump(mode="json")
 
 
 class GoalMessage(_Strict):
@@ -161,9 +160,6 @@ class SimulateRequest(_Strict):
     time_limit_s: float | None = Field(default=None, gt=0, le=MAX_SIM_TIME_S,
                                        description="simulated seconds (default 2 × rolling time + 20 s)")
 
-    def request_json(self) -> dict[str, Any]:
-        return self.model_dump(mode="json")
-
 
 class TensegrityStaticRequest(_Strict):
     """``POST /v1/tensegrity/static``: the four hybrid static states of TeXploR for slider angles θ1, θ2
@@ -175,15 +171,12 @@ class TensegrityStaticRequest(_Strict):
     verify: bool = Field(default=True, description="cross-check with a potential-energy minimisation")
     robot: Name = "texplor"
 
-    def request_json(self) -> dict[str, Any]:
-        return self.model_dump(mode="json")
-
 
 Pair = Annotated[list[Metres], Field(min_length=2, max_length=2)]
 AnglePair = Annotated[list[Angle], Field(min_length=2, max_length=2)]
 
 
-class ReconfigureRequest(_Strict):
+class ReconfigureIn(_Strict):
     """``POST /v1/reconfigure`` and the ``sphereplan/reconfigure`` query: roll a Spherobot (paper 004) to
     ``goal`` with its camera point P on top (as ``sphereplan reconfigure``). Angles in radians unless
     ``degrees``; ``map`` (a name or an inline grid) checks the swept sphere against obstacles."""
@@ -201,9 +194,6 @@ class ReconfigureRequest(_Strict):
     map: Name | InlineGrid | None = None
     allow_unknown: bool = False
 
-    def request_json(self) -> dict[str, Any]:
-        return self.model_dump(mode="json")
-
 
 class VpipRodsRequest(_Strict):
     """``POST /v1/vpip/rods``: eq. 18 rod lengths for one VPIP plane, roll and pitch phase (paper 000), as
@@ -216,9 +206,6 @@ class VpipRodsRequest(_Strict):
     degrees: bool = False
     robot: Name = "daedalus"
 
-    def request_json(self) -> dict[str, Any]:
-        return self.model_dump(mode="json")
-
 
 class VpipScheduleRequest(_Strict):
     """``POST /v1/vpip/schedule``: 100 Hz VPIP angles and rod lengths along a plan (the time series
@@ -227,9 +214,6 @@ class VpipScheduleRequest(_Strict):
     path: PlanIn
     robot: Name | None = Field(default=None, description="default: the plan's robot, else daedalus")
     driver: Literal["vpip", "simple"] = "vpip"
-
-    def request_json(self) -> dict[str, Any]:
-        return self.model_dump(mode="json")
 
 
 # ------------------------------------------------------------------------------------ response documentation
@@ -309,8 +293,8 @@ def field_name(loc: Sequence[int | str]) -> str:
     return out or "body"
 
 
-def describe_errors(errors: Sequence[Any]) -> tuple[str, str]:
-    """(field, sentence) for a list of pydantic error dicts: the most specific error first.
+def invalid_input(errors: Sequence[Any]) -> InvalidInput:
+    """The :class:`InvalidInput` a list of pydantic error dicts amounts to: the most specific error first.
 
     Errors saying "wrong type" for one branch of a union are only reported when nothing more specific
     was found (``map: "../x"`` reports the name pattern, not "should be an object").
@@ -320,8 +304,8 @@ def describe_errors(errors: Sequence[Any]) -> tuple[str, str]:
     if first.get("type") == "json_invalid":
         loc = first.get("loc", ())
         where = f" at character {loc[-1]}" if loc and isinstance(loc[-1], int) else ""
-        return "body", f"body: malformed JSON{where}: {(first.get('ctx') or {}).get('error', first.get('msg'))}"
+        return InvalidInput("body", f"malformed JSON{where}: {(first.get('ctx') or {}).get('error', first.get('msg'))}")
     field = field_name(first.get("loc", ()))
     msg = str(first.get("msg", "invalid value"))
     others = len({f for f in (field_name(e.get("loc", ())) for e in errors) if not field.startswith(f)})
-    return field, f"{field}: {msg}" + (f" (and {others} more field(s))" if others else "")
+    return InvalidInput(field, msg + (f" (and {others} more field(s))" if others else ""))

@@ -7,7 +7,7 @@ Key expressions (payloads are the same JSON as the HTTP API, encoding ``applicat
   the callback only validates and submits, the reply is sent when the job finishes, so a slow plan
   never blocks other queries. Every query is finalised (``drop``) once answered.
 * queryables ``sphereplan/reconfigure`` and ``sphereplan/simulate`` — payloads a
-  :class:`~service.wire.ReconfigureRequest` / :class:`~service.wire.SimulateRequest`, replying what
+  :class:`~service.wire.ReconfigureIn` / :class:`~service.wire.SimulateRequest`, replying what
   ``/v1/reconfigure`` / ``/v1/simulate`` answer.
 * ``sphereplan/*/pose`` (a :class:`~service.wire.PoseIn`) and ``sphereplan/*/goal`` (a
   :class:`~service.wire.GoalMessage`), taken by one subscriber so that a pose published just before a
@@ -35,9 +35,11 @@ from typing import Any, TypeVar
 import zenoh
 from pydantic import BaseModel, ValidationError
 
-from planner.errors import SpherePlanError
-from service.core import Outcome, PlanningService, ServiceBusy, ServiceSettings, error_outcome, outcome_of_exception
-from service.wire import GoalMessage, PlanRequest, PoseIn, ReconfigureRequest, SimulateRequest, describe_errors
+from planner.errors import InvalidInput, StartOutsideMap
+from service.core import PlanningService
+from service.outcome import Outcome, error_outcome, outcome_of_exception
+from service.settings import ServiceSettings
+from service.wire import GoalMessage, PlanRequest, PoseIn, ReconfigureIn, SimulateRequest, invalid_input
 
 log = logging.getLogger(__name__)
 
@@ -64,24 +66,25 @@ def node_config(settings: ServiceSettings) -> zenoh.Config:
 
 
 def parse(model: type[M], payload: zenoh.ZBytes | None) -> M:
-    """Validate a JSON payload against a wire model; raises :class:`_BadPayload` with the error outcome."""
+    """Validate a JSON payload against a wire model; raises :class:`InvalidInput` naming the field."""
     if payload is None:
-        raise _BadPayload(error_outcome("bad_input", "body: a JSON payload is required", "body"))
+        raise InvalidInput("body", "a JSON payload is required")
     try:
         data = json.loads(payload.to_bytes())
     except (UnicodeDecodeError, json.JSONDecodeError) as exc:
-        raise _BadPayload(error_outcome("bad_input", f"body: malformed JSON: {exc}", "body")) from None
+        raise InvalidInput("body", f"malformed JSON: {exc}") from None
     try:
         return model.model_validate(data)
     except ValidationError as exc:
-        field, msg = describe_errors(exc.errors())
-        raise _BadPayload(error_outcome("bad_input", msg, field)) from None
+        raise invalid_input(exc.errors()) from None
 
 
-class _BadPayload(Exception):
-    def __init__(self, outcome: Outcome) -> None:
-        super().__init__(outcome.body.decode())
-        self.outcome = outcome
+def refusal(exc: Exception, where: str) -> Outcome:
+    """The outcome of a message refused before a job was queued (bad payload or request, busy, or a bug)."""
+    outcome = outcome_of_exception(exc)
+    if outcome.kind == "internal":
+        log.error("%s failed", where, exc_info=exc)
+    return outcome
 
 
 class ZenohNode:
@@ -101,7 +104,7 @@ class ZenohNode:
         # one entry per queryable capability: key suffix → (request model, submit)
         self.queryables: dict[str, tuple[type[BaseModel], Callable[[Any], Future[Outcome]]]] = {
             "plan": (PlanRequest, service.submit_plan),
-            "reconfigure": (ReconfigureRequest, service.submit_reconfigure),
+            "reconfigure": (ReconfigureIn, service.submit_reconfigure),
             "simulate": (SimulateRequest, service.submit_simulate),
         }
 
@@ -139,18 +142,8 @@ class ZenohNode:
         def on_query(query: zenoh.Query) -> None:
             try:
                 future = submit(parse(model, query.payload))
-            except _BadPayload as exc:
-                self._answer(query, key, exc.outcome)
-                return
-            except ServiceBusy as exc:
-                self._answer(query, key, exc.outcome())
-                return
-            except SpherePlanError as exc:
-                self._answer(query, key, outcome_of_exception(exc))
-                return
             except Exception as exc:
-                log.exception("query on %s failed", key)
-                self._answer(query, key, outcome_of_exception(exc))
+                self._answer(query, key, refusal(exc, f"query on {key}"))
                 return
             future.add_done_callback(lambda done: self._answer(query, key, done.result()))
 
@@ -159,7 +152,7 @@ class ZenohNode:
     def _answer(self, query: zenoh.Query, key: str, outcome: Outcome) -> None:
         """Reply (or reply_err) and finalise the query, whatever happens."""
         try:
-            if outcome.ok:
+            if outcome.answer.zenoh_reply == "reply":
                 query.reply(key, outcome.body, encoding=JSON)
             else:
                 query.reply_err(outcome.body, encoding=JSON)
@@ -208,8 +201,8 @@ class ZenohNode:
         robot_id = self._robot_id(sample)
         try:
             pose = parse(PoseIn, sample.payload)
-        except _BadPayload as exc:
-            self._status(robot_id, self._goal_ids.get(robot_id, 0), "invalid_pose", exc.outcome)
+        except InvalidInput as exc:
+            self._status(robot_id, self._goal_ids.get(robot_id, 0), "invalid_pose", outcome_of_exception(exc))
             return
         with self._lock:
             self._poses[robot_id] = pose
@@ -218,27 +211,23 @@ class ZenohNode:
         robot_id = self._robot_id(sample)
         try:
             goal = parse(GoalMessage, sample.payload)
-        except _BadPayload as exc:
+        except InvalidInput as exc:
             # a malformed goal is reported but does not cancel the goal being planned
-            self._status(robot_id, self._goal_ids.get(robot_id, 0), "invalid_goal", exc.outcome)
+            self._status(robot_id, self._goal_ids.get(robot_id, 0), "invalid_goal", outcome_of_exception(exc))
             return
         with self._lock:
             goal_id = self._goal_ids.get(robot_id, 0) + 1
             self._goal_ids[robot_id] = goal_id
             pose = self._poses.get(robot_id)
+        if pose is None:
+            self._status(robot_id, goal_id, "failed", error_outcome(
+                InvalidInput, f"no pose received yet on {PREFIX}/{robot_id}/pose to plan from", "pose",
+                StartOutsideMap.code))
+            return
         try:
-            if pose is None:
-                raise _BadPayload(error_outcome(
-                    "bad_input", f"no pose received yet on {PREFIX}/{robot_id}/pose to plan from", "pose", 203))
             future = self.service.submit_plan(goal.plan_request(pose))
-        except _BadPayload as exc:
-            self._status(robot_id, goal_id, "failed", exc.outcome)
-            return
-        except ServiceBusy as exc:
-            self._status(robot_id, goal_id, "failed", exc.outcome())
-            return
-        except SpherePlanError as exc:
-            self._status(robot_id, goal_id, "failed", outcome_of_exception(exc))
+        except Exception as exc:
+            self._status(robot_id, goal_id, "failed", refusal(exc, f"goal of {robot_id}"))
             return
         self._status(robot_id, goal_id, "planning", start=pose.model_dump(), goal=goal.goal.model_dump())
         future.add_done_callback(lambda done: self._goal_done(robot_id, goal_id, done.result()))

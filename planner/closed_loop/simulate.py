@@ -38,10 +38,10 @@ from planner.robot import RobotProfile, load_robot
 
 @dataclass(frozen=True)
 class SimulationOptions:
-    """Closed-loop settings. ``tracker`` is ``"mpc"`` (eq. 15) or ``"pursuit"`` (the geometric tracker
-    alone, fast; used for long localisation runs). ``time_limit_s`` None = 2 × the path's rolling time
-    at cruise speed + 20 s. ``goal_tolerance_m``: a segment is done when its end is this close along
-    the end heading."""
+    """Closed-loop settings, checked when they are made (:class:`InvalidInput` naming the field).
+    ``tracker`` is ``"mpc"`` (eq. 15) or ``"pursuit"`` (the geometric tracker alone, fast; used for long
+    localisation runs). ``time_limit_s`` None = 2 × the path's rolling time at cruise speed + 20 s.
+    ``goal_tolerance_m``: a segment is done when its end is this close along the end heading."""
 
     control_rate_hz: float = 50.0
     substeps: int = 10
@@ -50,6 +50,12 @@ class SimulationOptions:
     filter: FilterParams = field(default_factory=FilterParams)
     time_limit_s: float | None = None
     goal_tolerance_m: float = 0.01
+
+    def __post_init__(self) -> None:
+        if self.tracker not in ("mpc", "pursuit"):
+            raise InvalidInput("tracker", f"must be 'mpc' or 'pursuit', got {self.tracker!r}")
+        if not (self.control_rate_hz > 0 and math.isfinite(self.control_rate_hz)):
+            raise InvalidInput("control_rate_hz", "must be a finite number > 0")
 
 
 def _robot_for(plan: dict[str, Any], robot: RobotProfile | str | None) -> RobotProfile:
@@ -98,10 +104,6 @@ def simulate_plan(
         raise InvalidInput("path", "must be a plan result object with 'states'")
     rob = _robot_for(plan_json, robot)
     dist = noise if isinstance(noise, Disturbances) else Disturbances.named(noise)
-    if opts.tracker not in ("mpc", "pursuit"):
-        raise InvalidInput("tracker", f"must be 'mpc' or 'pursuit', got {opts.tracker!r}")
-    if not (opts.control_rate_hz > 0 and math.isfinite(opts.control_rate_hz)):
-        raise InvalidInput("control_rate_hz", "must be a finite number > 0")
     ref = ReferencePath(plan_json["states"])
     rng_slip, rng_imu, rng_gnss, rng_init = (
         np.random.default_rng(s) for s in np.random.SeedSequence(seed).spawn(4)

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import math
 from functools import lru_cache
+from typing import Any
 
 import numpy as np
 from scipy.optimize import least_squares
@@ -24,7 +25,7 @@ LAND_TOL_M = 1e-4  # the rolled end must land this close to the goal (and within
 
 
 @lru_cache(maxsize=8)
-def _space(rho: float):  # type: ignore[no-untyped-def]
+def _space(rho: float) -> Any:
     from ompl import base as ob
 
     return ob.ReedsSheppStateSpace(rho)

@@ -27,7 +27,7 @@ from __future__ import annotations
 import logging
 import math
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, fields, replace
 from typing import Any
 
@@ -92,8 +92,8 @@ class PlannerOptions:
     smooth_max_tries: int = 24        # candidate shortcut targets tried per path knot
     smooth_passes: int = 3            # shortcut passes; later passes re-subdivide the path (≈ 2 % shorter)
 
-    def validate(self) -> None:
-        """Raise :class:`InvalidInput` naming the first bad option."""
+    def __post_init__(self) -> None:
+        """Every option set is checked when it is made: raise :class:`InvalidInput` naming the first bad option."""
         def need(ok: bool, name: str, msg: str) -> None:
             if not ok:
                 raise InvalidInput(f"options.{name}", msg)
@@ -124,7 +124,7 @@ class PlannerOptions:
         need(1 <= self.smooth_passes <= 20, "smooth_passes", "must be in [1, 20]")
 
     @classmethod
-    def from_dict(cls, data: dict[str, Any]) -> PlannerOptions:
+    def from_dict(cls, data: Mapping[str, Any]) -> PlannerOptions:
         """Options from a JSON object; unknown keys and wrong types are rejected by name."""
         known = {f.name: f for f in fields(cls)}
         values: dict[str, Any] = {}
@@ -132,6 +132,11 @@ class PlannerOptions:
             if key not in known:
                 raise InvalidInput(f"options.{key}", f"unknown option; known: {', '.join(sorted(known))}")
             default = getattr(cls(), key)
+            if default is None:  # an optional switch (None = the robot decides)
+                if value is not None and not isinstance(value, bool):
+                    raise InvalidInput(f"options.{key}", f"must be true, false or null, got {value!r}")
+                values[key] = value
+                continue
             if isinstance(default, bool):
                 if not isinstance(value, bool):
                     raise InvalidInput(f"options.{key}", f"must be true or false, got {value!r}")
@@ -141,9 +146,7 @@ class PlannerOptions:
             elif isinstance(value, bool) or not isinstance(value, int | float):
                 raise InvalidInput(f"options.{key}", f"must be a number, got {value!r}")
             values[key] = type(default)(value)
-        opts = cls(**values)
-        opts.validate()
-        return opts
+        return cls(**values)
 
 
 Pose = tuple[float, float, float]
@@ -257,7 +260,6 @@ class HybridAStar:
 
     def __init__(self, grid: OccupancyGrid, robot: RobotProfile, options: PlannerOptions | None = None) -> None:
         self.options = options or PlannerOptions()
-        self.options.validate()
         n_bins = self.options.n_roll_bins or self.options.n_rolls
         closed_mb = grid.width * grid.height * self.options.n_yaw_bins * n_bins / 8 / 2**20
         if closed_mb > CLOSED_SET_BUDGET_MB:
@@ -371,7 +373,6 @@ class HybridAStar:
         warm_up()
         t0 = time.perf_counter()
         o = self.options if time_limit_s is None else replace(self.options, time_limit_s=time_limit_s)
-        o.validate()
         deadline = t0 + o.time_limit_s
         start = (float(start[0]), float(start[1]), wrap(float(start[2])))
         goal = (float(goal[0]), float(goal[1]), wrap(float(goal[2])))

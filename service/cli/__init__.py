@@ -4,7 +4,8 @@ Each verb lives in its own module of this package and exposes ``VERB`` (its name
 and ``add_arguments(parser)``; the parser's ``func`` default takes the parsed arguments and returns the
 exit code. Verbs are discovered, so a new capability adds one module and nothing else.
 
-Exit codes (docs/contracts.md): 0 success, 2 bad input (the message on stderr names the field),
+Exit codes (docs/contracts.md) come from the one outcome table (:mod:`service.outcome`): 0 success,
+2 bad input (the message on stderr names the field; a start or goal outside the map or occupied too),
 3 no solution exists, 4 timeout.
 """
 
@@ -18,12 +19,8 @@ import sys
 from collections.abc import Sequence
 
 from planner import __version__
-from planner.errors import InvalidInput, NotFound, PlannerTimedOut, PlanningError, SpherePlanError
-
-EXIT_OK = 0
-EXIT_BAD_INPUT = 2
-EXIT_NO_SOLUTION = 3
-EXIT_TIMEOUT = 4
+from planner.errors import SpherePlanError
+from service.outcome import EXIT_BAD_INPUT, answer_for
 
 
 class _Parser(argparse.ArgumentParser):
@@ -59,18 +56,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     logging.basicConfig(level=logging.INFO if args.verbose else logging.WARNING, format="%(levelname)s %(message)s")
     try:
         return int(args.func(args))
-    except (InvalidInput, NotFound) as exc:
-        sys.stderr.write(f"sphereplan {args.verb}: error: {exc}\n")
-        return EXIT_BAD_INPUT
-    except PlannerTimedOut as exc:
-        sys.stderr.write(f"sphereplan {args.verb}: timeout: {exc}\n")
-        return EXIT_TIMEOUT
-    except PlanningError as exc:
-        sys.stderr.write(f"sphereplan {args.verb}: no solution: {exc}\n")
-        return EXIT_NO_SOLUTION
     except SpherePlanError as exc:
-        sys.stderr.write(f"sphereplan {args.verb}: error: {exc}\n")
-        return EXIT_BAD_INPUT
+        answer = answer_for(exc)
+        sys.stderr.write(f"sphereplan {args.verb}: {answer.cli_label}: {exc}\n")
+        return answer.exit_code
 
 
 if __name__ == "__main__":

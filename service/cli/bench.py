@@ -110,7 +110,7 @@ def run(args: argparse.Namespace) -> int:
     if args.runs < 1:
         raise InvalidInput("--runs", "must be ≥ 1")
     if args.suite in ("reconfigure", "all"):
-        from planner.spherobot.reconfigure import benchmark, format_benchmark
+        from planner.spherobot.bench import benchmark, format_benchmark
 
         print("reconfiguration plan times (200 random problems per method and mode)")
         print(format_benchmark(benchmark(200, 0)) + "\n")

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import sys
 from pathlib import Path
 from typing import Any
 
@@ -14,14 +13,12 @@ from planner.hybrid_astar.search import PlannerOptions
 from planner.maps.load import load_any
 from planner.result import failure_json
 from planner.robot import load_robot
-from service.cli import EXIT_BAD_INPUT, EXIT_NO_SOLUTION, EXIT_OK, EXIT_TIMEOUT
 from service.cli._io import emit_json, finite_float, positive_float
-from service.pipeline import execute_plan, pose_of
+from service.outcome import EXIT_OK
+from service.pipeline import PlanQuery, execute_plan
 
 VERB = "plan"
 HELP = "plan a path the sphere can roll from START to GOAL on a map"
-# start/goal outside the map or in collision: the caller's input is unusable (exit 2, like HTTP 400)
-BAD_ENDPOINT_CODES = (203, 204, 205, 206)
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -31,14 +28,17 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--robot", default=None, help="built-in profile name (default zju-60) or a TOML file")
     parser.add_argument("--time-limit", type=positive_float, default=None, help="seconds (default 5)")
     parser.add_argument("--options", default=None, help="JSON object of planner options, e.g. '{\"greed\": 1.0}'")
-    parser.add_argument("--reverse", action="store_true", help="allow reversing")
+    direction = parser.add_mutually_exclusive_group()
+    direction.add_argument("--reverse", action="store_true",
+                           help="allow reversing (the default for robots whose profile says reversible, as spheres)")
+    direction.add_argument("--forward-only", action="store_true", help="never reverse")
     parser.add_argument("--out", default=None, help="write the JSON here instead of stdout")
     parser.add_argument("--plot", default=None, help="write a PNG of the plan")
     parser.set_defaults(func=run)
 
 
-def _request(args: argparse.Namespace) -> dict[str, Any]:
-    """The CLI arguments as the plan request JSON the HTTP and Zenoh doors take."""
+def _query(args: argparse.Namespace) -> PlanQuery:
+    """The CLI arguments as the plan query every door builds (bad options are bad input here)."""
     options: dict[str, Any] = {}
     if args.options:
         try:
@@ -49,36 +49,27 @@ def _request(args: argparse.Namespace) -> dict[str, Any]:
             raise InvalidInput("--options", "must be a JSON object")
     if args.reverse:
         options["allow_reverse"] = True
-    pose = ("x", "y", "yaw")
-    return {
-        "start": dict(zip(pose, args.start, strict=True)),
-        "goal": dict(zip(pose, args.goal, strict=True)),
-        "options": options,
-        "time_limit_s": args.time_limit,
-    }
+    if args.forward_only:
+        options["allow_reverse"] = False
+    (x0, y0, yaw0), (x1, y1, yaw1) = args.start, args.goal
+    return PlanQuery((x0, y0, yaw0), (x1, y1, yaw1), PlannerOptions.from_dict(options), args.time_limit)
 
 
 def run(args: argparse.Namespace) -> int:
     robot = load_robot(args.robot)
-    request = _request(args)
-    PlannerOptions.from_dict(request["options"])  # bad options are bad input before the map is read
+    query = _query(args)  # before the map is read
     if not Path(args.map).exists():
         raise InvalidInput("--map", f"{args.map} does not exist")
     grid = load_any(args.map, robot)
-    start, goal = pose_of(request["start"]), pose_of(request["goal"])
     try:
-        result = execute_plan(request, grid, robot)
-    except PlanningError as exc:
+        result = execute_plan(query, grid, robot)
+    except PlanningError as exc:  # the failed result is printed too; the exit code is the error's (service.outcome)
         emit_json(failure_json(exc.code, exc.msg, robot, exc.planning_time_s, exc.expansions), args.out)
         if args.plot:
-            plot_plan(grid, robot, None, start, goal, args.plot, title=f"{grid.name}: no path ({exc.code})")
-        if exc.code in BAD_ENDPOINT_CODES:
-            sys.stderr.write(f"sphereplan plan: error: {exc.msg}\n")
-            return EXIT_BAD_INPUT
-        sys.stderr.write(f"sphereplan plan: {'timeout' if exc.code == 207 else 'no path'}: {exc.msg}\n")
-        return EXIT_TIMEOUT if exc.code == 207 else EXIT_NO_SOLUTION
+            plot_plan(grid, robot, None, query.start, query.goal, args.plot, title=f"{grid.name}: no path ({exc.code})")
+        raise
     emit_json(result.to_json(), args.out)
     if args.plot:
-        plot_plan(grid, robot, result.states, start, goal, args.plot,
+        plot_plan(grid, robot, result.states, query.start, query.goal, args.plot,
                   title=f"{grid.name}: {robot.name}, {result.length_m:.2f} m in {result.planning_time_s * 1000:.0f} ms")
     return EXIT_OK

@@ -6,7 +6,8 @@ import argparse
 from typing import Any
 
 from planner.occupancy import OccupancyGrid
-from planner.spherobot.reconfigure import METHODS, plan_reconfiguration
+from planner.spherobot.reconfigure import plan_reconfiguration
+from planner.spherobot.request import METHODS, ReconfigureRequest
 from service.cli._io import emit_json, finite_float, positive_float
 
 VERB = "reconfigure"
@@ -79,7 +80,7 @@ def request_from_args(args: argparse.Namespace) -> dict[str, Any]:
 
 def run(args: argparse.Namespace) -> int:
     grid = _load_map(args.map) if args.map else None
-    result = plan_reconfiguration(request_from_args(args), grid=grid)
+    result = plan_reconfiguration(ReconfigureRequest.from_dict(request_from_args(args)), grid=grid)
     emit_json(result, args.out)
     if args.plot:
         from planner.spherobot.plot import plot_reconfiguration

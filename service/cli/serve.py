@@ -10,17 +10,13 @@ from __future__ import annotations
 import argparse
 import logging
 from pathlib import Path
-from typing import TYPE_CHECKING
 
 from planner.errors import InvalidInput
-
-if TYPE_CHECKING:
-    from service.core import ServiceSettings
+from service.settings import MAX_TIME_LIMIT_S, ServiceSettings
 
 VERB = "serve"
 HELP = "serve planning over HTTP (FastAPI) and Zenoh from one process"
 GRACEFUL_SHUTDOWN_S = 2
-MAX_TIME_LIMIT_S = 60.0  # service.wire.MAX_TIME_LIMIT_S (not imported: ``sphereplan --help`` stays light)
 
 
 def _port(text: str) -> int:
@@ -62,7 +58,6 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def settings_from_args(args: argparse.Namespace) -> ServiceSettings:
     from planner.maps.catalogue import default_maps_dir
-    from service.core import ServiceSettings
 
     maps_dir = Path(args.maps) if args.maps else default_maps_dir()
     if not maps_dir.is_dir():

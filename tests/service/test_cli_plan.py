@@ -1,6 +1,10 @@
 """``sphereplan plan``: exit codes, JSON contract, plot."""
 
 import json
+import os
+import subprocess
+import sys
+from pathlib import Path
 
 import pytest
 
@@ -8,6 +12,7 @@ from planner.maps.catalogue import default_maps_dir
 from service.cli import main
 
 GARAGE = str(default_maps_dir() / "garage.yaml")
+REPO = Path(__file__).resolve().parents[2]
 
 
 def run(capsys, *argv):
@@ -74,7 +79,22 @@ def test_no_path_exits_3_and_timeout_exits_4(capsys):
     assert code == 3 and json.loads(out)["error_code"] == 208 and "no path" in err
     code, out, _ = run(capsys, "plan", "--map", GARAGE, "--start", "12", "8.05", "0", "--goal", "12", "23.55", "3.1416",
                        "--time-limit", "0.001", "--options", "{\"greed\": 0.0, \"chunk_expansions\": 10}")
-    assert code == 4 and json.loads(out)["error_code"] == 207
+    failed = json.loads(out)
+    assert code == 4 and failed["error_code"] == 207
+    # a failed result reports the time and expansions it really spent
+    assert failed["planning_time_s"] > 0 and failed["expansions"] >= 10
+
+
+def test_first_plan_with_an_empty_compile_cache_succeeds_within_the_default_limit(tmp_path):
+    """The one-off numba compilation happens before the search's clock starts (README's first command)."""
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "numba-cache")}
+    proc = subprocess.run(
+        [sys.executable, "-m", "service.cli", "plan", "--map", GARAGE, "--start", "12", "8.05", "0", "--goal", "12",
+         "23.55", "3.1416"], capture_output=True, text=True, env=env, timeout=1800, cwd=REPO)
+    assert proc.returncode == 0, proc.stderr
+    result = json.loads(proc.stdout)
+    assert result["status"] == "exact"
+    assert any((tmp_path / "numba-cache").rglob("*.nbi"))  # it really compiled into the empty cache
 
 
 def test_version_flag_prints_the_package_version(capsys) -> None:

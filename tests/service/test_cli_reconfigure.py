@@ -212,3 +212,11 @@ def test_map_with_room_succeeds_and_reports_the_check(capsys, monkeypatch):
     # an empty map: the clearance is the distance to the map's edge, less the radius (within two cells)
     edge = min(min(s["x"] + 10, 10 - s["x"], s["y"] + 10, 10 - s["y"]) for s in res["samples"]) - res["radius_m"]
     assert edge - 2 * 0.1 <= res["map"]["min_clearance_m"] <= edge + 1e-9
+
+
+def test_start_on_an_obstacle_is_bad_input_like_plan(capsys, monkeypatch):
+    monkeypatch.setattr(verb, "_load_map", lambda path: _boxed_grid())
+    code, _, err = _run(capsys, ["reconfigure", "--radius", "0.5", "--start", "-3", "-3", "--goal", "0", "0",
+                                 "--map", "box.yaml"])
+    assert code == 2
+    assert "error:" in err and "start" in err and "obstacle" in err

@@ -14,18 +14,13 @@ from PIL import Image
 from pydantic import ValidationError
 
 from planner.errors import GoalOccupied, InvalidInput, NotFound, PlannerTimedOut
+from planner.maps.catalogue import map_files
 from planner.occupancy import OccupancyGrid
-from service.core import (
-    Outcome,
-    PlanningService,
-    ServiceBusy,
-    ServiceSettings,
-    grid_png,
-    inline_grid,
-    map_index,
-    outcome_of_exception,
-)
-from service.wire import PlanRequest, describe_errors, field_name
+from service.core import PlanningService
+from service.grids import grid_png, inline_grid
+from service.outcome import ServiceBusy, ok_outcome, outcome_of_exception
+from service.settings import ServiceSettings
+from service.wire import InlineGrid, PlanRequest, field_name, invalid_input
 from tests.service import service_harness as harness
 from tests.service.service_harness import plan_body, strip_timing
 
@@ -51,7 +46,7 @@ class NeverDone(Executor):
 
     def finish_all(self) -> None:
         for future in self.futures:
-            future.set_result(Outcome("ok", b"{}"))
+            future.set_result(ok_outcome({}))
 
 
 def test_settings_are_validated_by_field(tmp_path: Path) -> None:
@@ -69,7 +64,7 @@ def test_settings_are_validated_by_field(tmp_path: Path) -> None:
 
 
 def test_map_names_only_reach_maps_in_the_folder(maps_dir: Path) -> None:
-    assert map_index(maps_dir) == {"hall": maps_dir / "hall.yaml"}
+    assert map_files(maps_dir) == {"hall": maps_dir / "hall.yaml"}
     service = PlanningService(ServiceSettings(maps_dir=maps_dir, zenoh=False), NeverDone)
     assert service.resolve_map("hall") == maps_dir / "hall.yaml"
     for name in ("..", "../maps/hall", "hall.yaml", ".hidden", "notes", str(maps_dir / "hall")):
@@ -109,8 +104,8 @@ def test_field_names_of_validation_errors() -> None:
     assert field_name(("options", "greed", "bool")) == "options.greed"
     with pytest.raises(ValidationError) as err:
         PlanRequest.model_validate({**plan_body(), "map": "../x"})
-    field, msg = describe_errors(err.value.errors())
-    assert field == "map" and "pattern" in msg  # the name rule, not "should be an object"
+    error = invalid_input(err.value.errors())
+    assert error.field == "map" and "pattern" in str(error)  # the name rule, not "should be an object"
 
 
 def test_in_flight_cap_gives_busy_and_frees_on_completion(maps_dir: Path) -> None:
@@ -131,7 +126,7 @@ def test_in_flight_cap_gives_busy_and_frees_on_completion(maps_dir: Path) -> Non
     assert service.in_flight == 2
     with pytest.raises(ServiceBusy) as err:
         service.submit_plan(request)
-    assert err.value.outcome().kind == "busy" and err.value.retry_after_s == 1
+    assert outcome_of_exception(err.value).kind == "busy" and err.value.retry_after_s == 1
     assert service.plan(request).kind == "busy"
     executors[0].finish_all()
     assert [p.result(timeout=1).kind for p in pending] == ["ok", "ok"]
@@ -183,10 +178,10 @@ def test_plan_in_a_thread_pool_matches_the_planner(maps_dir: Path) -> None:
 
 def test_inline_grids_are_cached_by_content() -> None:
     spec = {"data": [[0, 0, 100], [0, -1, 0]], "resolution_m": 0.5, "origin": [1.0, 2.0, 0.0], "name": "tiny"}
-    grid = inline_grid(spec)
-    assert grid is inline_grid(json.loads(json.dumps(spec)))
+    grid = inline_grid(InlineGrid.model_validate(spec))
+    assert grid is inline_grid(InlineGrid.model_validate(json.loads(json.dumps(spec))))
     assert grid.data.dtype == np.int8 and grid.data[0, 2] == 100 and grid.origin == (1.0, 2.0, 0.0)
-    assert grid is not inline_grid({**spec, "resolution_m": 0.25})
+    assert grid is not inline_grid(InlineGrid.model_validate({**spec, "resolution_m": 0.25}))
 
 
 def test_map_png_is_north_up_with_map_server_shades() -> None:

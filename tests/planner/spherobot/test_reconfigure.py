@@ -9,13 +9,9 @@ import pytest
 
 from planner.errors import GoalOutsideMap, InvalidInput, NoValidPathFound, StartOccupied
 from planner.occupancy import OccupancyGrid
-from planner.spherobot.reconfigure import (
-    ReconfigureRequest,
-    benchmark,
-    candidates,
-    format_benchmark,
-    plan_reconfiguration,
-)
+from planner.spherobot.bench import benchmark, format_benchmark
+from planner.spherobot.reconfigure import candidates, plan_reconfiguration
+from planner.spherobot.request import ReconfigureRequest
 from tests.reconfigcheck import check_result, disc_hits
 
 EXAMPLE = {
@@ -165,7 +161,7 @@ def test_start_on_an_obstacle_and_goal_outside_the_map():
 
 
 def test_candidates_are_sorted_shortest_first():
-    req = ReconfigureRequest.from_dict({**EXAMPLE, "alpha_final": None, "goal_heading": 40.0}).validated()
+    req = ReconfigureRequest.from_dict({**EXAMPLE, "alpha_final": None, "goal_heading": 40.0})
     lengths = [m.length_m for m in candidates(req)]
     assert lengths == sorted(lengths) and len(lengths) > 2
 

@@ -1,0 +1,81 @@
+"""The grids requests plan on: map files and inline grids, cached per process, and a map as a PNG.
+
+A worker process keeps the last few grids it loaded, keyed by file (and modification time) or by the
+content of an inline grid, so repeated requests on a map hand the planner the same grid object and reuse
+the Hybrid A* planner it cached for that grid (:func:`planner.hybrid_astar.plan.plan_path`).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import io
+import threading
+from collections import OrderedDict
+from collections.abc import Callable
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from planner.maps.nav2 import MESH_SUFFIXES
+from planner.occupancy import OccupancyGrid
+from planner.robot import load_robot
+
+if TYPE_CHECKING:
+    from service.wire import InlineGrid
+
+_GRIDS: OrderedDict[tuple[Any, ...], OccupancyGrid] = OrderedDict()
+_GRID_CACHE_SIZE = 8
+_GRID_LOCK = threading.Lock()
+
+
+def _cached(key: tuple[Any, ...], make: Callable[[], OccupancyGrid]) -> OccupancyGrid:
+    with _GRID_LOCK:
+        grid = _GRIDS.get(key)
+        if grid is not None:
+            _GRIDS.move_to_end(key)
+            return grid
+    grid = make()
+    with _GRID_LOCK:
+        _GRIDS[key] = grid
+        while len(_GRIDS) > _GRID_CACHE_SIZE:
+            _GRIDS.popitem(last=False)
+    return grid
+
+
+def load_map_file(path: Path, robot_name: str | None) -> OccupancyGrid:
+    """A map file as a grid, cached per (file, modification time[, robot for meshes])."""
+    from planner.maps.load import load_any
+
+    stat = path.stat()
+    mesh = path.suffix.lower() in MESH_SUFFIXES
+    key = ("file", str(path), stat.st_mtime_ns, stat.st_size, robot_name if mesh else None)
+    return _cached(key, lambda: load_any(path, load_robot(robot_name) if mesh else None))
+
+
+def inline_grid(spec: InlineGrid) -> OccupancyGrid:
+    """An :class:`OccupancyGrid` from an inline grid (cached by content, so repeated inline requests
+    reuse the planner built for it)."""
+    data = np.asarray(spec.data, dtype=np.int8)
+    origin = (float(spec.origin[0]), float(spec.origin[1]), float(spec.origin[2]))
+    digest = hashlib.sha1(data.tobytes()).hexdigest()
+    key = ("inline", digest, data.shape, float(spec.resolution_m), origin, spec.name)
+    return _cached(key, lambda: OccupancyGrid(data=data, resolution_m=float(spec.resolution_m),
+                                              origin=origin, name=spec.name))
+
+
+def load_grid(source: Path | InlineGrid, robot_name: str | None) -> OccupancyGrid:
+    """The grid of a request: a map file of the maps folder (:func:`load_map_file`) or an inline grid."""
+    return load_map_file(source, robot_name) if isinstance(source, Path) else inline_grid(source)
+
+
+def grid_png(grid: OccupancyGrid) -> bytes:
+    """The grid as a greyscale PNG the way map_server images look: free white, occupied black,
+    unknown grey, image row 0 at the top."""
+    from PIL import Image
+
+    data = grid.data
+    pixels = np.where(data < 0, 205, 254 - (np.clip(data, 0, 100).astype(np.int32) * 254) // 100).astype(np.uint8)
+    buf = io.BytesIO()
+    Image.fromarray(pixels[::-1], mode="L").save(buf, format="PNG")
+    return buf.getvalue()

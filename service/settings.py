@@ -1,0 +1,60 @@
+"""What a running service is configured with: :class:`ServiceSettings`, validated once, and the hard limits.
+
+``sphereplan serve`` builds the settings from its options; the planning service, the HTTP app and the
+Zenoh node read them. The module imports nothing heavy, so the CLI can read the limits for its help text.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
+from planner.errors import InvalidInput
+
+#: largest inline grid a request may carry (cells); a server may set a lower one, the HTTP body limit caps it too
+MAX_INLINE_CELLS = 250_000
+#: largest time limit a request may ask for (s); a server may set a lower one
+MAX_TIME_LIMIT_S = 60.0
+
+
+@dataclass(frozen=True)
+class ServiceSettings:
+    """Everything the service, the HTTP app and the Zenoh node are configured with, validated once.
+
+    ``maps_dir`` None means the shipped maps (:func:`planner.maps.catalogue.default_maps_dir`).
+    ``max_in_flight`` 0 means 4 jobs per worker. ``zenoh_listen`` is the default peer's only endpoint
+    (ignored when ``zenoh_config`` names a Zenoh config file). ``max_body_bytes`` bounds HTTP bodies.
+    """
+
+    maps_dir: Path | None = None
+    workers: int = 2
+    max_in_flight: int = 0
+    max_time_limit_s: float = MAX_TIME_LIMIT_S
+    max_inline_cells: int = MAX_INLINE_CELLS
+    max_body_bytes: int = 4_000_000
+    retry_after_s: int = 1
+    warm_up: bool = True
+    zenoh: bool = True
+    zenoh_config: Path | None = None
+    zenoh_listen: str = "tcp/127.0.0.1:7447"
+
+    def __post_init__(self) -> None:
+        def need(ok: bool, name: str, msg: str) -> None:
+            if not ok:
+                raise InvalidInput(name, msg)
+
+        need(1 <= self.workers <= 64, "workers", f"must be in [1, 64], got {self.workers}")
+        need(self.max_in_flight >= 0, "max_in_flight", f"must be ≥ 0 (0 = 4 per worker), got {self.max_in_flight}")
+        need(math.isfinite(self.max_time_limit_s) and 0 < self.max_time_limit_s <= MAX_TIME_LIMIT_S,
+             "max_time_limit_s", f"must be in (0, {MAX_TIME_LIMIT_S:g}], got {self.max_time_limit_s}")
+        need(1 <= self.max_inline_cells <= MAX_INLINE_CELLS, "max_inline_cells",
+             f"must be in [1, {MAX_INLINE_CELLS}], got {self.max_inline_cells}")
+        need(self.max_body_bytes >= 1024, "max_body_bytes", f"must be ≥ 1024, got {self.max_body_bytes}")
+        need(self.retry_after_s >= 1, "retry_after_s", f"must be ≥ 1, got {self.retry_after_s}")
+        if self.zenoh_config is not None:
+            need(Path(self.zenoh_config).is_file(), "zenoh_config", f"{self.zenoh_config} is not a file")
+
+    @property
+    def in_flight_cap(self) -> int:
+        return self.max_in_flight or 4 * self.workers
