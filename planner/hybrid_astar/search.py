@@ -58,6 +58,7 @@ RS_CELL_M = 0.1  # sampling of the Reeds–Shepp heuristic table (m)
 CLEARANCE_REACH_M = 2.0  # the reported min_clearance_m is capped here (farther obstacles do not matter)
 GOAL_CHECK_AFTER = 20_000  # expansions without a path before the goal's surroundings are searched (fail fast)
 GOAL_CHECK_BUDGET = 40_000  # expansions that search may take
+GOAL_CHECK_SHARE = 0.15  # ... and at most this share of the time limit
 CLOSED_SET_BUDGET_MB = 1024  # the closed-set bitset of one plan may not exceed this (≈ 9000² cells at defaults)
 
 
@@ -408,7 +409,7 @@ class HybridAStar:
                 # 5b. Fail fast: a bounded search of the reverse problem (from the goal, every motion run
                 # backwards) that exhausts proves the goal pose cannot be approached at all.
                 checked_goal = True
-                back = self._reverse_search(start, goal, o)
+                back = self._reverse_search(start, goal, o, time.perf_counter() + GOAL_CHECK_SHARE * o.time_limit_s)
                 if back is not None:
                     raise NoValidPathFound(
                         f"no valid path: the goal pose ({goal[0]:.2f}, {goal[1]:.2f}, yaw {goal[2]:.2f}) can be "
@@ -464,12 +465,13 @@ class HybridAStar:
             extra={"unsmoothed_length_m": raw_length, "search_time_s": t_search, "smoothing_time_s": t_smooth},
         )
 
-    def _reverse_search(self, start: Pose, goal: Pose, o: PlannerOptions) -> int | None:
+    def _reverse_search(self, start: Pose, goal: Pose, o: PlannerOptions, deadline: float) -> int | None:
         """Search the reverse problem within :data:`GOAL_CHECK_BUDGET` expansions: from the goal to the start
         with every motion run backwards. A path run backwards is rolled by the same kinematics with the
         heading turned by π (and the roll mirrored, which maps the symmetric roll set onto itself); a
         reversible robot's motion set is its own reverse. Returns the number of states from which the goal
-        can be reached when that search exhausts them all (so the start is not among them), else None."""
+        can be reached when that search exhausts them all (so the start is not among them), else None (also
+        when it runs past ``deadline``)."""
         flip = 0.0 if self.reverse else math.pi
         back_start = (goal[0], goal[1], wrap(goal[2] + flip))
         back_goal = (start[0], start[1], wrap(start[2] + flip))
@@ -477,7 +479,7 @@ class HybridAStar:
             return None
         heur = self.holonomic(back_goal[:2], back_start[:2])
         run = _Search(self, back_start, back_goal, heur, o)
-        while run.expansions < GOAL_CHECK_BUDGET:
+        while run.expansions < GOAL_CHECK_BUDGET and time.perf_counter() < deadline:
             status = run.step(min(o.chunk_expansions, GOAL_CHECK_BUDGET - run.expansions))
             if status == core.EXHAUSTED:
                 return run.expansions
