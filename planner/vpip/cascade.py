@@ -329,7 +329,8 @@ def run_schedule(
     θ_VPIP, the pitch phase, the tracked pose (x, y, yaw, s) and ``rod_length_m`` (ticks × 2n commanded
     lengths after the rod-speed limit); with ``plant="mujoco"`` also ``rod_measured_m`` (the slide
     joints' positions) and ``rods_on_ground`` (how many rod tips touch the floor). Stops when the end of
-    the path is reached or after ``max_duration_s`` (default: 1.5 × the plan's duration + 10 s).
+    the path is reached or after ``max_duration_s`` (default: 1.5 × the plan's duration + 10 s; on the
+    MuJoCo plant 3 × + 20 s, since it rolls slower than the plan's timing).
     """
     if driver not in DRIVERS:
         raise InvalidInput("driver", f"must be one of {', '.join(DRIVERS)}, got {driver!r}")
@@ -341,7 +342,9 @@ def run_schedule(
     ref = PathReference.from_plan(plan, profile)
     dt = 1.0 / rate_hz
     t_end = float(ref.t[-1] - ref.t[0])
-    limit_s = max_duration_s if max_duration_s is not None else 1.5 * t_end + 10.0
+    # the MuJoCo sphere rolls at ~0.6 of the plan's ω = 1 rad/s (docs/vpip.md): give it the time
+    default_limit = 3.0 * t_end + 20.0 if plant == "mujoco" else 1.5 * t_end + 10.0
+    limit_s = max_duration_s if max_duration_s is not None else default_limit
     model = profile.roll_model
     max_k = profile.max_curvature
     max_roll = profile.max_roll_rad
