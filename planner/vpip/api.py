@@ -17,6 +17,7 @@ import numpy as np
 from planner.errors import InvalidInput, RobotProfileError
 from planner.robot import RobotProfile, RollModel, load_robot
 from planner.vpip.cascade import rod_params, run_schedule
+from planner.vpip.circle import run_circle
 from planner.vpip.rods import rod_lengths
 
 
@@ -150,14 +151,10 @@ def parse_runs_csv(text: str) -> tuple[list[float], list[float]]:
     return rolls, radii
 
 
-def calibrate_report(runs_csv_text: str, robot: str | RobotProfile = "daedalus") -> dict[str, Any]:
-    """Fit a calibrated roll model from measured runs (``sphereplan vpip calibrate``).
-
-    Runs at the same roll are averaged in curvature; the table is (roll, mean radius) sorted by roll,
-    interpolated by :class:`~planner.robot.RollModel` (PCHIP through (0, 0), held beyond the last roll).
-    """
-    profile = robot if isinstance(robot, RobotProfile) else load_robot(robot)
-    rolls, radii = parse_runs_csv(runs_csv_text)
+def _fit_roll_table(
+    rolls: list[float], radii: list[float], profile: RobotProfile, field: str = "runs"
+) -> dict[str, Any]:
+    """Roll model from runs (roll rad, radius m): runs at one roll are averaged in curvature."""
     groups: dict[float, list[float]] = {}  # keyed by roll in degrees (rounded to 1e-6 deg)
     for r, rad in zip(rolls, radii, strict=True):
         groups.setdefault(round(math.degrees(r), 6), []).append(1.0 / rad)
@@ -167,7 +164,7 @@ def calibrate_report(runs_csv_text: str, robot: str | RobotProfile = "daedalus")
     try:
         model = RollModel("calibrated", profile.radius_m, tuple(table_roll), tuple(table_radius))
     except RobotProfileError as exc:
-        raise InvalidInput("runs", f"cannot make a roll model from these runs: {exc.msg}") from None
+        raise InvalidInput(field, f"cannot make a roll model from these runs: {exc.msg}") from None
     fit = [
         {
             "roll_deg": d,
@@ -189,6 +186,86 @@ def calibrate_report(runs_csv_text: str, robot: str | RobotProfile = "daedalus")
         "the last run's value beyond it",
         "min_turning_radius_m": model.turning_radius(model.max_table_roll_rad),
     }
+
+
+def calibrate_report(runs_csv_text: str, robot: str | RobotProfile = "daedalus") -> dict[str, Any]:
+    """Fit a calibrated roll model from measured runs (``sphereplan vpip calibrate --runs``).
+
+    Runs at the same roll are averaged in curvature; the table is (roll, mean radius) sorted by roll,
+    interpolated by :class:`~planner.robot.RollModel` (PCHIP through (0, 0), held beyond the last roll).
+    """
+    profile = robot if isinstance(robot, RobotProfile) else load_robot(robot)
+    rolls, radii = parse_runs_csv(runs_csv_text)
+    return {**_fit_roll_table(rolls, radii, profile), "source": "measured runs (CSV)"}
+
+
+def calibrate_from_circles(
+    circles: list[Mapping[str, Any]], robot: str | RobotProfile = "daedalus"
+) -> dict[str, Any]:
+    """Fit the roll model from circle runs (:func:`circle_report` results, or their ``summary``).
+
+    Each run contributes (|desired roll|, fitted diameter): the table maps the roll the cascade *asks*
+    for to the circle the plant then rolls, which is what a planner needs. Runs that did not turn
+    enough to fit a circle (``diameter_m`` null) are rejected, naming the run.
+    """
+    profile = robot if isinstance(robot, RobotProfile) else load_robot(robot)
+    if not circles:
+        raise InvalidInput("circles", "no circle runs given")
+    rolls: list[float] = []
+    radii: list[float] = []
+    plants: set[str] = set()
+    for i, run in enumerate(circles):
+        summ = run.get("summary", run) if isinstance(run, Mapping) else None
+        if not isinstance(summ, Mapping):
+            raise InvalidInput(f"circles[{i}]", "must be a circle result (JSON object with 'summary')")
+        roll = summ.get("roll_desired_deg")
+        diameter = summ.get("diameter_m")
+        if isinstance(roll, bool) or not isinstance(roll, int | float) or not math.isfinite(roll) or roll == 0:
+            raise InvalidInput(f"circles[{i}].summary.roll_desired_deg", f"must be a non-zero number, got {roll!r}")
+        if isinstance(diameter, bool) or not isinstance(diameter, int | float) or not diameter > 0:
+            raise InvalidInput(
+                f"circles[{i}].summary.diameter_m",
+                f"must be a positive number (the run turned too little to fit a circle?), got {diameter!r}",
+            )
+        rolls.append(math.radians(abs(float(roll))))
+        radii.append(0.5 * float(diameter))
+        plants.add(str(summ.get("plant", "unknown")))
+    out = _fit_roll_table(rolls, radii, profile, "circles")
+    out["source"] = f"circle runs on the {'/'.join(sorted(plants))} plant"
+    return out
+
+
+def circle_report(
+    roll_rad: float,
+    robot: str | RobotProfile = "daedalus",
+    plant: str = "mujoco",
+    duration_s: float = 30.0,
+    driver: str = "vpip",
+    omega_rad_s: float = 1.0,
+    theta_vpip_rad: float | None = None,
+) -> dict[str, Any]:
+    """Hold a roll and fit the circle rolled (``sphereplan vpip circle``; the full time series)."""
+    profile = robot if isinstance(robot, RobotProfile) else load_robot(robot)
+    roll = _finite("roll", roll_rad)
+    duration = _finite("duration", duration_s)
+    omega = _finite("omega", omega_rad_s)
+    theta = None if theta_vpip_rad is None else _finite("theta_vpip", theta_vpip_rad)
+    return run_circle(profile, roll, duration, plant, driver, omega, theta)
+
+
+def calibrate_by_simulation(
+    rolls_rad: list[float],
+    robot: str | RobotProfile = "daedalus",
+    plant: str = "mujoco",
+    duration_s: float = 30.0,
+    driver: str = "vpip",
+) -> dict[str, Any]:
+    """Run one circle per roll on ``plant`` and fit the roll model from them (``calibrate --rolls``)."""
+    profile = robot if isinstance(robot, RobotProfile) else load_robot(robot)
+    if not rolls_rad:
+        raise InvalidInput("rolls", "give at least one roll")
+    runs = [circle_report(r, profile, plant, duration_s, driver)["summary"] for r in rolls_rad]
+    return {**calibrate_from_circles(runs, profile), "circles": runs}
 
 
 def _toml_value(value: Any) -> str:
@@ -225,7 +302,10 @@ def profile_toml(profile: RobotProfile, roll_model: Mapping[str, Any]) -> str:
 
 
 def schedule_report(
-    plan: Mapping[str, Any], robot: str | RobotProfile | None = None, driver: str = "vpip"
+    plan: Mapping[str, Any],
+    robot: str | RobotProfile | None = None,
+    driver: str = "vpip",
+    plant: str = "surrogate",
 ) -> dict[str, Any]:
     """Run the cascade along a planner result (``sphereplan vpip schedule``; the full time series).
 
@@ -239,4 +319,4 @@ def schedule_report(
             else "daedalus"
         )
     profile = robot if isinstance(robot, RobotProfile) else load_robot(robot)
-    return run_schedule(plan, profile, driver=driver)
+    return run_schedule(plan, profile, driver=driver, plant=plant)

@@ -28,6 +28,11 @@ mapped to the plane angles that best reproduce them (:func:`rods.equivalent_plan
 the same plant. The sphere then moves by paper 001 eq. 1 with the profile's roll model:
 ``ẋ = v cos ψ − r φ̇ sin ψ``, ``ẏ = v sin ψ + r φ̇ cos ψ``, ``ψ̇ = v·κ(φ)``.
 
+``plant="mujoco"`` replaces the surrogate and the eq. 1 kinematics with the rod physics
+(:mod:`planner.vpip.mujoco_plant`): the same controllers read roll, ω, pitch phase and pose from the
+simulated body and the rods' commanded lengths drive its 16 slide joints; the sphere turns however the
+contacts make it turn (the roll model is then only used to choose the desired roll).
+
 Reverse motion (negative ``v`` in the plan) is not supported.
 """
 
@@ -45,14 +50,20 @@ from planner.kinematics import wrap
 from planner.result import state_column
 from planner.robot import RobotProfile
 from planner.vpip.controllers import PitchController, RollController, gains_from_section
+from planner.vpip.mujoco_plant import MujocoPlant, Observation
 from planner.vpip.rods import RodDriver, RodParams, equivalent_plane
 from planner.vpip.simple import SimpleDriver
 
 DRIVERS = ("vpip", "simple")
+PLANTS = ("surrogate", "mujoco")
 
 SURROGATE_NOTE = (
     "surrogate plant, not the rod/contact physics: rotational speed follows theta_vpip through a "
     "first-order lag, roll follows phi_vpip through a damped second-order lag, both rate-limited"
+)
+MUJOCO_NOTE = (
+    "MuJoCo rigid-body model: shell, baseplate, battery pendulum and 16 rods on slide joints with position "
+    "servos; the commanded rod lengths drive it and roll, omega, pitch phase and pose are read from the body"
 )
 
 
@@ -131,6 +142,71 @@ class SurrogatePlant:
         self.omega_rad_s = _lag(
             self.omega_rad_s, p.omega_gain * theta_vpip_rad, p.omega_tau_s, p.omega_accel_rad_s2, dt_s
         )
+
+
+class SurrogateSphere:
+    """:class:`SurrogatePlant` plus the sphere's motion by paper 001 eq. 1 with the profile's roll model.
+
+    Same interface as :class:`~planner.vpip.mujoco_plant.MujocoPlant` (``observe``, ``step``) so the
+    cascade can drive either; it moves on the plane angles and ignores the rod lengths.
+    """
+
+    def __init__(
+        self, p: PlantParams, profile: RobotProfile, x: float, y: float, yaw: float, roll_rad: float
+    ) -> None:
+        self.plant = SurrogatePlant(p, roll_rad=roll_rad, omega_rad_s=0.0)
+        self.profile = profile
+        self.x, self.y, self.yaw, self.phase = x, y, yaw, 0.0
+
+    def observe(self) -> Observation:
+        return Observation(self.plant.roll_rad, self.plant.omega_rad_s, self.phase, self.x, self.y, self.yaw)
+
+    def step(self, phi_vpip_rad: float, theta_vpip_rad: float, rod_lengths_m: np.ndarray, dt_s: float) -> None:
+        roll, omega = self.plant.roll_rad, self.plant.omega_rad_s
+        self.plant.step(phi_vpip_rad, theta_vpip_rad, dt_s)
+        roll_rate = (self.plant.roll_rad - roll) / dt_s
+        r = self.profile.radius_m
+        v = omega * r
+        yaw_new = self.yaw + v * float(self.profile.roll_model.curvature(roll)) * dt_s
+        self.x += (v * math.cos(self.yaw) - r * roll_rate * math.sin(self.yaw)) * dt_s
+        self.y += (v * math.sin(self.yaw) + r * roll_rate * math.cos(self.yaw)) * dt_s
+        self.yaw = yaw_new
+        self.phase += omega * dt_s
+
+
+class MujocoSphere:
+    """:class:`~planner.vpip.mujoco_plant.MujocoPlant` behind the cascade's plant interface (rods only)."""
+
+    def __init__(self, profile: RobotProfile, params: RodParams, x: float, y: float, yaw: float) -> None:
+        from planner.vpip.mujoco_model import BodyParams
+
+        self.body = BodyParams.from_section(vpip_section(profile))
+        self.sim = MujocoPlant(params, self.body, x=x, y=y, yaw=yaw)
+
+    def observe(self) -> Observation:
+        return self.sim.observe()
+
+    def step(self, phi_vpip_rad: float, theta_vpip_rad: float, rod_lengths_m: np.ndarray, dt_s: float) -> None:
+        self.sim.step(rod_lengths_m, dt_s)
+
+
+def make_plant(
+    plant: str, profile: RobotProfile, params: RodParams, x: float, y: float, yaw: float, roll_rad: float = 0.0
+) -> SurrogateSphere | MujocoSphere:
+    """The cascade's plant: ``"surrogate"`` (fast default) or ``"mujoco"`` (rod physics, starts upright)."""
+    if plant not in PLANTS:
+        raise InvalidInput("plant", f"must be one of {', '.join(PLANTS)}, got {plant!r}")
+    if plant == "mujoco":
+        return MujocoSphere(profile, params, x, y, yaw)
+    return SurrogateSphere(PlantParams.from_profile(profile, params), profile, x, y, yaw, roll_rad)
+
+
+def plant_json(sphere: SurrogateSphere | MujocoSphere) -> dict[str, Any]:
+    """What the result says about its plant: kind, a note, and the plant's parameters."""
+    if isinstance(sphere, MujocoSphere):
+        return {"kind": "mujoco", "note": MUJOCO_NOTE, **sphere.body.to_json()}
+    p = sphere.plant.p
+    return {"kind": "surrogate", "note": SURROGATE_NOTE, **{k: getattr(p, k) for k in p.__dataclass_fields__}}
 
 
 @dataclass(frozen=True)
@@ -225,30 +301,50 @@ class TrackingGains:
     lookahead_s: float = 0.5
 
 
+def rod_rate_stats(lengths_m: np.ndarray, dt_s: float, limit_m_s: float) -> dict[str, float]:
+    """Statistics of a (ticks × rods) length series' per-tick rates: max, 95th percentile, mean |rate|,
+    and the share of rod-ticks moving at (within 1 % of) the limit."""
+    if len(lengths_m) < 2:
+        return {"max_m_s": 0.0, "p95_m_s": 0.0, "mean_abs_m_s": 0.0, "share_at_limit": 0.0}
+    rate = np.abs(np.diff(lengths_m, axis=0)) / dt_s
+    return {
+        "max_m_s": float(rate.max()),
+        "p95_m_s": float(np.percentile(rate, 95)),
+        "mean_abs_m_s": float(rate.mean()),
+        "share_at_limit": float(np.mean(rate >= 0.99 * limit_m_s)),
+    }
+
+
 def run_schedule(
     plan: Mapping[str, Any],
     profile: RobotProfile,
     driver: str = "vpip",
     tracking: TrackingGains | None = None,
     max_duration_s: float | None = None,
+    plant: str = "surrogate",
 ) -> dict[str, Any]:
     """Run the cascade along ``plan`` and return the time series (JSON-ready, SI units, radians).
 
     ``series`` holds, per tick: t, desired and simulated roll, desired and simulated ω, φ_VPIP,
     θ_VPIP, the pitch phase, the tracked pose (x, y, yaw, s) and ``rod_length_m`` (ticks × 2n commanded
-    lengths after the rod-speed limit). Stops when the end of the path is reached or after
-    ``max_duration_s`` (default: 1.5 × the plan's duration + 10 s).
+    lengths after the rod-speed limit); with ``plant="mujoco"`` also ``rod_measured_m`` (the slide
+    joints' positions) and ``rods_on_ground`` (how many rod tips touch the floor). Stops when the end of
+    the path is reached or after ``max_duration_s`` (default: 1.5 × the plan's duration + 10 s; on the
+    MuJoCo plant 3 × + 20 s, since it rolls slower than the plan's timing).
     """
     if driver not in DRIVERS:
         raise InvalidInput("driver", f"must be one of {', '.join(DRIVERS)}, got {driver!r}")
+    if plant not in PLANTS:
+        raise InvalidInput("plant", f"must be one of {', '.join(PLANTS)}, got {plant!r}")
     tracking = tracking or TrackingGains()
     params = rod_params(profile)
     roll_gains, pitch_gains, rate_hz = gains_from_section(vpip_section(profile))
-    plant_p = PlantParams.from_profile(profile, params)
     ref = PathReference.from_plan(plan, profile)
     dt = 1.0 / rate_hz
     t_end = float(ref.t[-1] - ref.t[0])
-    limit_s = max_duration_s if max_duration_s is not None else 1.5 * t_end + 10.0
+    # the MuJoCo sphere rolls at ~0.6 of the plan's ω = 1 rad/s (docs/vpip.md): give it the time
+    default_limit = 3.0 * t_end + 20.0 if plant == "mujoco" else 1.5 * t_end + 10.0
+    limit_s = max_duration_s if max_duration_s is not None else default_limit
     model = profile.roll_model
     max_k = profile.max_curvature
     max_roll = profile.max_roll_rad
@@ -260,35 +356,39 @@ def run_schedule(
     pitch_ctl = PitchController(pitch_gains, dt)
     vpip = RodDriver(params, dt)
     simple = SimpleDriver(params, dt)
-    plant = SurrogatePlant(plant_p, roll_rad=roll0, omega_rad_s=0.0)
-    x, y, yaw = float(ref.x[0]), float(ref.y[0]), float(ref.yaw[0])
-    s_sim, phase, roll_des = float(ref.s[0]), 0.0, roll0
+    sphere = make_plant(plant, profile, params, float(ref.x[0]), float(ref.y[0]), float(ref.yaw[0]), roll0)
+    obs = sphere.observe()
+    roll_des = obs.roll_rad if plant == "mujoco" else roll0
+    s_sim = float(ref.s[0])
     s_goal = float(ref.s[-1])
-    rec: dict[str, list[Any]] = {
-        k: []
-        for k in (
-            "t",
-            "roll_desired_rad",
-            "roll_rad",
-            "omega_desired_rad_s",
-            "omega_rad_s",
-            "phi_vpip_rad",
-            "theta_vpip_rad",
-            "pitch_phase_rad",
-            "curvature_cmd",
-            "x",
-            "y",
-            "yaw",
-            "s",
-            "rod_length_m",
-        )
-    }
+    keys = [
+        "t",
+        "roll_desired_rad",
+        "roll_rad",
+        "omega_desired_rad_s",
+        "omega_rad_s",
+        "phi_vpip_rad",
+        "theta_vpip_rad",
+        "pitch_phase_rad",
+        "curvature_cmd",
+        "x",
+        "y",
+        "yaw",
+        "s",
+        "lateral_error_m",
+        "rod_length_m",
+    ]
+    if plant == "mujoco":
+        keys += ["rod_measured_m", "rods_on_ground"]
+    rec: dict[str, list[Any]] = {k: [] for k in keys}
     max_lat = 0.0
     reached = False
     steps = math.ceil(limit_s / dt)
     for k in range(steps + 1):
         t = k * dt
         t_plan = ref.t[0] + t
+        roll, omega, phase = obs.roll_rad, obs.omega_rad_s, obs.phase_rad
+        x, y, yaw = obs.x, obs.y, obs.yaw
         # 1. desired curvature → desired roll (profile roll model), rate-limited
         v_plan = ref.v_at_t(t_plan)
         xr, yr, yawr = ref.pose_at(s_sim)
@@ -305,7 +405,6 @@ def run_schedule(
         omega_des = max(0.0, min(max_omega, v_des / params.r_m))
         if s_sim >= s_goal:
             omega_des = 0.0
-        roll, omega = plant.roll_rad, plant.omega_rad_s
         # 3.–4. controllers and rods
         if driver == "vpip":
             phi_v = roll_ctl.command(roll, roll_des)
@@ -332,46 +431,58 @@ def run_schedule(
             ("y", y),
             ("yaw", yaw),
             ("s", s_sim),
+            ("lateral_error_m", e_lat),
         ):
             rec[key].append(float(value))
         rec["rod_length_m"].append([float(v) for v in lengths])
+        if isinstance(sphere, MujocoSphere):
+            rec["rod_measured_m"].append([float(v) for v in sphere.sim.rod_lengths_m()])
+            rec["rods_on_ground"].append(int(sphere.sim.rods_on_ground().sum()))
         if s_sim >= s_goal:
             reached = True
             break
-        # surrogate plant and sphere kinematics (paper 001 eq. 1)
-        plant.step(phi_v, theta_v, dt)
-        roll_rate = (plant.roll_rad - roll) / dt
-        v = omega * profile.radius_m
-        yaw_new = yaw + v * float(model.curvature(roll)) * dt
-        x += (v * math.cos(yaw) - profile.radius_m * roll_rate * math.sin(yaw)) * dt
-        y += (v * math.sin(yaw) + profile.radius_m * roll_rate * math.cos(yaw)) * dt
-        yaw = yaw_new
-        s_sim += max(v, 0.0) * dt
-        phase += omega * dt
+        sphere.step(phi_v, theta_v, lengths, dt)
+        obs = sphere.observe()
+        if isinstance(sphere, MujocoSphere):
+            # progress along the path: the centre's displacement along the path tangent
+            ds = (obs.x - x) * math.cos(yawr) + (obs.y - y) * math.sin(yawr)
+            s_sim += max(ds, 0.0)
+        else:
+            s_sim += max(omega * profile.radius_m, 0.0) * dt
 
     lengths_arr = np.asarray(rec["rod_length_m"])
     rod_rate = float(np.max(np.abs(np.diff(lengths_arr, axis=0))) / dt) if len(lengths_arr) > 1 else 0.0
     roll_err = np.asarray(rec["roll_rad"]) - np.asarray(rec["roll_desired_rad"])
     gx, gy, _ = ref.pose_at(s_goal)
+    lat = np.asarray(rec["lateral_error_m"])
     summary = {
+        "plant": plant,
         "reached_end": reached,
         "duration_s": rec["t"][-1],
         "plan_duration_s": t_end,
         "ticks": len(rec["t"]),
         "path_length_m": ref.length_m,
         "max_lateral_error_m": max_lat,
-        "final_position_error_m": math.hypot(x - gx, y - gy),
+        "rms_lateral_error_m": float(np.sqrt(np.mean(lat**2))),
+        "final_position_error_m": math.hypot(obs.x - gx, obs.y - gy),
         "rms_roll_error_rad": float(np.sqrt(np.mean(roll_err**2))),
         "max_rod_rate_m_s": rod_rate,
         "max_abs_phi_vpip_rad": float(np.max(np.abs(rec["phi_vpip_rad"]))),
         "max_abs_theta_vpip_rad": float(np.max(np.abs(rec["theta_vpip_rad"]))),
     }
+    if isinstance(sphere, MujocoSphere):
+        summary["measured_rod_rate"] = rod_rate_stats(
+            np.asarray(rec["rod_measured_m"]), dt, params.rod_speed_m_s
+        )
+        summary["peak_rod_speed_m_s"] = sphere.sim.peak_rod_speed_m_s
+        summary["max_rod_length_m"] = float(np.max(rec["rod_measured_m"]))
+        summary["mean_rods_on_ground"] = float(np.mean(rec["rods_on_ground"]))
     n = params.rods_per_side
     return {
         "driver": driver,
         "robot": profile.name,
         "rate_hz": rate_hz,
-        "plant": {"note": SURROGATE_NOTE, **{k: getattr(plant_p, k) for k in plant_p.__dataclass_fields__}},
+        "plant": plant_json(sphere),
         "params": params.to_json(),
         "rods": [{"index": i, "side": "left" if i < n else "right"} for i in range(2 * n)],
         "summary": summary,

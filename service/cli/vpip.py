@@ -1,4 +1,4 @@
-"""``sphereplan vpip``: rod lengths, roll↔radius, calibration and 100 Hz rod schedules (paper 000)."""
+"""``sphereplan vpip``: rod lengths, roll↔radius, calibration, 100 Hz rod schedules and circle runs (paper 000)."""
 
 from __future__ import annotations
 
@@ -10,10 +10,11 @@ from typing import Any
 from planner.errors import InvalidInput
 from planner.robot import load_robot
 from planner.vpip import api
+from planner.vpip.cascade import PLANTS
 from service.cli._io import emit_json, finite_float, positive_float, read_json_file
 
 VERB = "vpip"
-HELP = "VPIP rod driver for rod-driven spheres (daedalus): rods, radius, roll, calibrate, schedule"
+HELP = "VPIP rod driver for rod-driven spheres (daedalus): rods, radius, roll, calibrate, schedule, circle"
 
 
 def _angle(args: argparse.Namespace, value: float) -> float:
@@ -51,9 +52,28 @@ def _read(path: str, field: str) -> str:
     return p.read_text()
 
 
+def _rolls(text: str) -> list[float]:
+    try:
+        values = [float(v) for v in text.split(",") if v.strip()]
+    except ValueError:
+        raise InvalidInput("rolls", f"must be comma-separated numbers in degrees, got {text!r}") from None
+    if not values or not all(math.isfinite(v) and 0 < v < 90 for v in values):
+        raise InvalidInput("rolls", f"must be comma-separated rolls in (0, 90) degrees, got {text!r}")
+    return [math.radians(v) for v in values]
+
+
 def _calibrate(args: argparse.Namespace) -> int:
     profile = load_robot(args.robot)
-    result = api.calibrate_report(_read(args.runs, "runs"), profile)
+    sources = sum(x is not None for x in (args.runs, args.circles, args.rolls))
+    if sources != 1:
+        raise InvalidInput("runs", "give exactly one of --runs (CSV), --circles (circle JSONs), --rolls (simulate)")
+    if args.runs is not None:
+        result = api.calibrate_report(_read(args.runs, "runs"), profile)
+    elif args.circles is not None:
+        circles = [read_json_file(path, f"circles[{i}]") for i, path in enumerate(args.circles)]
+        result = api.calibrate_from_circles(circles, profile)
+    else:
+        result = api.calibrate_by_simulation(_rolls(args.rolls), profile, args.plant, args.duration)
     if args.out:
         Path(args.out).write_text(api.profile_toml(profile, result["roll_model"]))
         load_robot(args.out)  # the written profile must load
@@ -62,9 +82,25 @@ def _calibrate(args: argparse.Namespace) -> int:
     return 0
 
 
+def _circle(args: argparse.Namespace) -> int:
+    if not 0 < args.duration <= 600:
+        raise InvalidInput("duration", f"must be in (0, 600] s, got {args.duration}")
+    theta = None if args.theta_deg is None else math.radians(args.theta_deg)
+    result = api.circle_report(
+        math.radians(args.roll_deg), args.robot, args.plant, args.duration, args.driver, args.omega, theta
+    )
+    emit_json(result, args.out)
+    if args.plot:
+        from planner.vpip.plot import plot_circle
+
+        plot_circle(result, args.plot)
+    emit_json({"out": str(args.out), "plot": args.plot, **result["summary"]}, None)
+    return 0
+
+
 def _schedule(args: argparse.Namespace) -> int:
     plan: Any = read_json_file(args.path, "path")
-    result = api.schedule_report(plan, args.robot, args.driver)
+    result = api.schedule_report(plan, args.robot, args.driver, args.plant)
     emit_json(result, args.out)
     if args.plot:
         from planner.vpip.plot import plot_schedule
@@ -107,8 +143,14 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     common(roll)
     roll.set_defaults(func=_roll)
 
-    cal = sub.add_parser("calibrate", help="fit a calibrated roll model from measured runs (CSV)")
-    cal.add_argument("--runs", required=True, help="CSV with header roll_deg,diameter_m (one row per run)")
+    cal = sub.add_parser(
+        "calibrate", help="fit a calibrated roll model from measured runs, circle JSONs or simulated circles"
+    )
+    cal.add_argument("--runs", help="CSV with header roll_deg,diameter_m (one row per run)")
+    cal.add_argument("--circles", nargs="+", help="circle result JSONs written by 'vpip circle --out'")
+    cal.add_argument("--rolls", help="simulate one circle per roll, comma-separated degrees (e.g. 5,10,15)")
+    cal.add_argument("--plant", choices=PLANTS, default="mujoco", help="plant for --rolls (default mujoco)")
+    cal.add_argument("--duration", type=positive_float, default=30.0, help="seconds per simulated circle")
     cal.add_argument("--out", help="write the profile with the fitted table to this TOML file")
     common(cal)
     cal.set_defaults(func=_calibrate)
@@ -122,6 +164,27 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     sched.add_argument(
         "--driver", choices=("vpip", "simple"), default="vpip", help="rod driver (default vpip)"
     )
+    sched.add_argument(
+        "--plant", choices=PLANTS, default="surrogate", help="surrogate (fast, default) or mujoco (rod physics)"
+    )
     common(sched, None)
     sched.set_defaults(func=_schedule)
+
+    circ = sub.add_parser("circle", help="hold a roll (and omega) on a plant and fit the circle rolled (paper §5)")
+    circ.add_argument("--roll-deg", type=finite_float, required=True, help="desired roll (deg), > 0 turns left")
+    circ.add_argument(
+        "--plant", choices=PLANTS, default="mujoco", help="mujoco (rod physics, default) or surrogate (table)"
+    )
+    circ.add_argument("--duration", type=positive_float, default=30.0, help="simulated seconds (default 30)")
+    circ.add_argument("--out", required=True, help="write the result with its time series (JSON) here")
+    circ.add_argument("--plot", help="write a PNG: track with fitted circle, roll, omega, rods")
+    circ.add_argument("--driver", choices=("vpip", "simple"), default="vpip", help="rod driver (default vpip)")
+    circ.add_argument("--omega", type=positive_float, default=1.0, help="desired rolling rate (rad/s, default 1)")
+    circ.add_argument(
+        "--theta-deg",
+        type=finite_float,
+        help="hold theta_vpip fixed (deg, open loop as in Fig. 7) instead of the pitch PI",
+    )
+    common(circ)
+    circ.set_defaults(func=_circle)
     parser.set_defaults(func=lambda args: args.func(args))

@@ -97,3 +97,39 @@ def test_schedule_writes_series_and_plot(capsys: pytest.CaptureFixture[str], tmp
     assert result["driver"] == "vpip" and "surrogate" in result["plant"]["note"]
     assert len(result["series"]["rod_length_m"][0]) == 16
     assert png.stat().st_size > 10_000
+
+
+def test_circle_verb_and_calibrate_from_its_output(capsys: pytest.CaptureFixture[str], tmp_path: Path) -> None:
+    outs = []
+    for roll in ("5", "15"):
+        out = tmp_path / f"c{roll}.json"
+        code, summary = _run(
+            capsys,
+            ["vpip", "circle", "--roll-deg", roll, "--plant", "surrogate", "--duration", "20", "--out", str(out)],
+        )
+        assert code == 0 and summary["plant"] == "surrogate" and "table" in summary["diameter_source"]
+        # the surrogate turns by the profile's own table: its circle reproduces the table (circular by design)
+        want = 2 * load_robot("daedalus").roll_model.turning_radius(math.radians(float(roll)))
+        assert summary["diameter_m"] == pytest.approx(want, rel=0.1)
+        assert summary["commanded_rod_rate"]["max_m_s"] <= 0.1 + 1e-9
+        outs.append(str(out))
+    prof = tmp_path / "cal.toml"
+    code, cal = _run(capsys, ["vpip", "calibrate", "--circles", *outs, "--out", str(prof)])
+    assert code == 0 and cal["roll_model"]["roll_deg"] == [5.0, 15.0]
+    assert load_robot(str(prof)).roll_model.kind == "calibrated"
+
+
+def test_circle_and_calibrate_bad_input_exit_2(capsys: pytest.CaptureFixture[str], tmp_path: Path) -> None:
+    out = str(tmp_path / "c.json")
+    assert main(["vpip", "circle", "--roll-deg", "40", "--out", out]) == 2
+    assert "roll" in capsys.readouterr().err
+    assert main(["vpip", "circle", "--roll-deg", "5", "--duration", "-3", "--out", out]) == 2
+    assert main(["vpip", "circle", "--roll-deg", "5", "--plant", "gazebo", "--out", out]) == 2
+    assert main(["vpip", "calibrate"]) == 2
+    assert "runs" in capsys.readouterr().err
+    assert main(["vpip", "calibrate", "--rolls", "5,abc"]) == 2
+    assert "rolls" in capsys.readouterr().err
+    bad = tmp_path / "bad.json"
+    bad.write_text('{"summary": {"roll_desired_deg": 5, "diameter_m": null}}')
+    assert main(["vpip", "calibrate", "--circles", str(bad)]) == 2
+    assert "circles[0].summary.diameter_m" in capsys.readouterr().err

@@ -1,0 +1,206 @@
+"""Held-roll circle runs (paper 000 §5, Fig. 10) and open-loop pitch runs (Fig. 7) on either plant.
+
+Paper 000 §5 holds a desired roll φ_r (roll PID, Table 1) and a rotational speed ω = 1 rad/s (pitch PI)
+for 30 s and reads the circle the robot rolls: 5°, 10°, 15° gave diameters of about 2.6, 2.0 and 1.7 m.
+:func:`run_circle` runs the same loop at 100 Hz — roll PID → φ_VPIP, pitch PI → θ_VPIP (or a fixed
+θ_VPIP, the open-loop runs of Fig. 7), eq. 18 → rods — or the §2 simple driver, on the MuJoCo plant
+(the circle comes out of the contact physics) or the surrogate (the circle comes out of the profile's roll
+table, so it only reproduces the table). :func:`fit_circle` fits the rolled track.
+
+Circle fit: algebraic least squares (Kåsa: ``x² + y² = 2ax + 2by + c``) on the centre's track after
+``settle_s``; the diameter from the heading, ``2·(path length)/|Δψ|`` over the same window, is
+reported beside it as a check (they agree when the track is a circle).
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+from typing import Any
+
+import numpy as np
+
+from planner.errors import InvalidInput
+from planner.robot import RobotProfile
+from planner.vpip.cascade import (
+    DRIVERS,
+    PLANTS,
+    MujocoSphere,
+    make_plant,
+    plant_json,
+    rod_params,
+    rod_rate_stats,
+    vpip_section,
+)
+from planner.vpip.controllers import PitchController, RollController, gains_from_section
+from planner.vpip.rods import RodDriver
+from planner.vpip.simple import SimpleDriver
+
+log = logging.getLogger(__name__)
+
+PAPER_DIAMETERS_M = {5.0: 2.6, 10.0: 2.0, 15.0: 1.7}
+"""Paper 000 §5 / Fig. 10: desired roll (deg) → circle diameter (m) at ω = 1 rad/s, 30 s runs."""
+
+
+def fit_circle(x: np.ndarray, y: np.ndarray) -> tuple[float, float, float, float]:
+    """Kåsa least-squares circle through the points: (centre x, centre y, radius, rms residual in m)."""
+    x = np.asarray(x, dtype=float)
+    y = np.asarray(y, dtype=float)
+    if x.size < 3:
+        raise InvalidInput("track", "needs at least three points to fit a circle")
+    a = np.c_[2.0 * x, 2.0 * y, np.ones_like(x)]
+    b = x * x + y * y
+    (cx, cy, c), *_ = np.linalg.lstsq(a, b, rcond=None)
+    r2 = c + cx * cx + cy * cy
+    radius = math.sqrt(r2) if r2 > 0 else math.inf
+    resid = float(np.sqrt(np.mean((np.hypot(x - cx, y - cy) - radius) ** 2))) if math.isfinite(radius) else math.inf
+    return float(cx), float(cy), radius, resid
+
+
+def run_circle(
+    profile: RobotProfile,
+    roll_rad: float,
+    duration_s: float = 30.0,
+    plant: str = "mujoco",
+    driver: str = "vpip",
+    omega_rad_s: float = 1.0,
+    theta_vpip_rad: float | None = None,
+    settle_s: float | None = None,
+) -> dict[str, Any]:
+    """Hold a desired roll (and ω, or a fixed θ_VPIP) for ``duration_s`` and fit the circle rolled.
+
+    Returns ``summary`` (``diameter_m`` from the fit, ``diameter_from_heading_m``, ``turned_deg``, mean
+    roll and ω after ``settle_s``, rod-rate statistics) and ``series`` (t, roll, ω, φ_VPIP, θ_VPIP, x, y,
+    yaw, rod lengths commanded and measured). ``diameter_m`` is null when the track turned less than
+    45° (too little arc to fit a circle; a straight run).
+    """
+    if driver not in DRIVERS:
+        raise InvalidInput("driver", f"must be one of {', '.join(DRIVERS)}, got {driver!r}")
+    if plant not in PLANTS:
+        raise InvalidInput("plant", f"must be one of {', '.join(PLANTS)}, got {plant!r}")
+    for name, value in (("roll", roll_rad), ("duration", duration_s), ("omega", omega_rad_s)):
+        if not math.isfinite(value):
+            raise InvalidInput(name, f"must be finite, got {value!r}")
+    if abs(roll_rad) > profile.max_roll_rad + 1e-12:
+        raise InvalidInput(
+            "roll", f"|roll| must be at most the profile's max roll {math.degrees(profile.max_roll_rad):.3g} deg"
+        )
+    if not 0 < duration_s <= 600:
+        raise InvalidInput("duration", f"must be in (0, 600] s, got {duration_s}")
+    if not 0 < omega_rad_s <= 5:
+        raise InvalidInput("omega", f"must be in (0, 5] rad/s, got {omega_rad_s}")
+    params = rod_params(profile)
+    roll_gains, pitch_gains, rate_hz = gains_from_section(vpip_section(profile))
+    if theta_vpip_rad is not None and not (
+        math.isfinite(theta_vpip_rad) and abs(theta_vpip_rad) <= pitch_gains.output_limit + 1e-12
+    ):
+        raise InvalidInput(
+            "theta_vpip", f"must be within ±{math.degrees(pitch_gains.output_limit):.3g} deg, got {theta_vpip_rad!r}"
+        )
+    settle = min(5.0, 0.25 * duration_s) if settle_s is None else settle_s
+    dt = 1.0 / rate_hz
+    sphere = make_plant(plant, profile, params, 0.0, 0.0, 0.0, roll_rad if plant == "surrogate" else 0.0)
+    roll_ctl = RollController(roll_gains, dt)
+    pitch_ctl = PitchController(pitch_gains, dt)
+    vpip = RodDriver(params, dt)
+    simple = SimpleDriver(params, dt)
+    keys = ["t", "roll_rad", "omega_rad_s", "phi_vpip_rad", "theta_vpip_rad", "x", "y", "yaw", "rod_length_m"]
+    mujoco = isinstance(sphere, MujocoSphere)
+    if mujoco:
+        keys += ["rod_measured_m", "rods_on_ground"]
+    rec: dict[str, list[Any]] = {k: [] for k in keys}
+    steps = round(duration_s / dt)
+    for k in range(steps + 1):
+        obs = sphere.observe()
+        if driver == "vpip":
+            phi_v = roll_ctl.command(obs.roll_rad, roll_rad)
+            theta_v = (
+                pitch_ctl.command(obs.omega_rad_s, omega_rad_s) if theta_vpip_rad is None else theta_vpip_rad
+            )
+            vpip.step(phi_v, theta_v, obs.roll_rad, obs.phase_rad)
+            lengths = vpip.lengths_m
+        else:
+            simple.step(obs.roll_rad, roll_rad, obs.phase_rad)
+            lengths = simple.lengths_m
+            phi_v = theta_v = math.nan
+        for key, value in (
+            ("t", k * dt),
+            ("roll_rad", obs.roll_rad),
+            ("omega_rad_s", obs.omega_rad_s),
+            ("phi_vpip_rad", phi_v),
+            ("theta_vpip_rad", theta_v),
+            ("x", obs.x),
+            ("y", obs.y),
+            ("yaw", obs.yaw),
+        ):
+            rec[key].append(float(value) if math.isfinite(value) else None)
+        rec["rod_length_m"].append([float(v) for v in lengths])
+        if isinstance(sphere, MujocoSphere):
+            rec["rod_measured_m"].append([float(v) for v in sphere.sim.rod_lengths_m()])
+            rec["rods_on_ground"].append(int(sphere.sim.rods_on_ground().sum()))
+        if k < steps:
+            sphere.step(phi_v, theta_v, lengths, dt)
+    summary = _summary(rec, dt, settle, params.rod_speed_m_s)
+    summary.update(
+        {
+            "plant": plant,
+            "driver": driver,
+            "roll_desired_deg": math.degrees(roll_rad),
+            "omega_desired_rad_s": omega_rad_s if theta_vpip_rad is None else None,
+            "theta_vpip_fixed_deg": None if theta_vpip_rad is None else math.degrees(theta_vpip_rad),
+            "duration_s": duration_s,
+            "settle_s": settle,
+            "commanded_rod_rate": rod_rate_stats(np.asarray(rec["rod_length_m"]), dt, params.rod_speed_m_s),
+        }
+    )
+    if isinstance(sphere, MujocoSphere):
+        measured = np.asarray(rec["rod_measured_m"])
+        summary["measured_rod_rate"] = rod_rate_stats(measured, dt, params.rod_speed_m_s)
+        summary["peak_rod_speed_m_s"] = sphere.sim.peak_rod_speed_m_s
+        summary["max_rod_length_m"] = float(measured.max())
+        summary["mean_rods_on_ground"] = float(np.mean(rec["rods_on_ground"]))
+        summary["diameter_source"] = "MuJoCo rigid-body contact physics"
+    else:
+        summary["diameter_source"] = "surrogate: the profile's roll model (table), not physics"
+    paper = PAPER_DIAMETERS_M.get(round(abs(math.degrees(roll_rad)), 6))
+    summary["paper_diameter_m"] = paper
+    if paper is not None and summary["diameter_m"] is not None:
+        summary["relative_to_paper"] = summary["diameter_m"] / paper - 1.0
+    log.info("circle %s/%s roll %.1f deg: %s", plant, driver, math.degrees(roll_rad), summary["diameter_m"])
+    return {
+        "robot": profile.name,
+        "rate_hz": rate_hz,
+        "plant": plant_json(sphere),
+        "params": params.to_json(),
+        "summary": summary,
+        "series": rec,
+    }
+
+
+def _summary(rec: dict[str, list[Any]], dt: float, settle_s: float, rod_speed: float) -> dict[str, Any]:
+    t = np.asarray(rec["t"])
+    late = t >= settle_s
+    if late.sum() < 3:
+        raise InvalidInput("duration", f"must be longer than the settling time {settle_s} s")
+    x = np.asarray(rec["x"])[late]
+    y = np.asarray(rec["y"])[late]
+    yaw = np.unwrap(np.asarray(rec["yaw"]))[late]
+    roll = np.asarray(rec["roll_rad"])[late]
+    omega = np.asarray(rec["omega_rad_s"])[late]
+    path = float(np.sum(np.hypot(np.diff(x), np.diff(y))))
+    turned = float(yaw[-1] - yaw[0])
+    cx, cy, radius, resid = fit_circle(x, y)
+    enough = abs(turned) >= math.radians(45.0) and math.isfinite(radius)
+    return {
+        "diameter_m": 2.0 * radius if enough else None,
+        "circle_centre_m": [cx, cy] if enough else None,
+        "fit_rms_m": resid if enough else None,
+        "diameter_from_heading_m": 2.0 * path / abs(turned) if abs(turned) > 1e-9 else None,
+        "turned_deg": math.degrees(turned),
+        "path_length_m": path,
+        "mean_speed_m_s": path / float(t[late][-1] - t[late][0]),
+        "mean_roll_deg": math.degrees(float(np.mean(roll))),
+        "std_roll_deg": math.degrees(float(np.std(roll))),
+        "mean_omega_rad_s": float(np.mean(omega)),
+        "std_omega_rad_s": float(np.std(omega)),
+    }
