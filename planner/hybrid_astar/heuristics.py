@@ -190,6 +190,9 @@ class HolonomicHeuristic:
         # undo the 16-connected metric's overestimate of Euclidean length.
         slack = 2.0 * math.sqrt(2.0) * cell_m
         self.table = np.maximum(raw / SIXTEEN_CONNECTED_RATIO - slack, 0.0)
+        finite = self.table[np.isfinite(self.table)]
+        #: values at or above this are the wavefront's cut-off plateau (a lower bound, not the cost-to-go)
+        self.cutoff = float(finite.max()) if start_xy is not None and finite.size else math.inf
 
     def __call__(self, x: float, y: float) -> float:
         ix = math.floor((x - self.origin_xy[0]) / self.cell_m)

@@ -27,6 +27,7 @@ from __future__ import annotations
 import logging
 import math
 import time
+from collections import OrderedDict
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, fields, replace
 from typing import Any
@@ -56,6 +57,7 @@ log = logging.getLogger(__name__)
 
 RS_CELL_M = 0.1  # sampling of the Reeds–Shepp heuristic table (m)
 CLEARANCE_REACH_M = 2.0  # the reported min_clearance_m is capped here (farther obstacles do not matter)
+HEURISTIC_CACHE_SIZE = 8  # holonomic tables kept per planner (one per goal cell)
 GOAL_CHECK_AFTER = 20_000  # expansions without a path before the goal's surroundings are searched (fail fast)
 GOAL_CHECK_BUDGET = 40_000  # expansions that search may take
 GOAL_CHECK_SHARE = 0.15  # ... and at most this share of the time limit
@@ -296,6 +298,7 @@ class HybridAStar:
         self.rs_table = (reeds_shepp_table(robot.min_turning_radius_m, o.n_yaw_bins, RS_CELL_M) if self.reverse
                          else np.zeros((1, 1, 1)))
         self.heuristic_factor = o.heuristic_downsample or auto_downsample(grid.data.shape)
+        self._heuristics: OrderedDict[tuple[int, int], HolonomicHeuristic] = OrderedDict()
         self.holonomic_mult = coarse_cost_grid(self.clearance.clearance, self.centre_threshold_m,
                                                self.footprint.radius_m,
                                                max(o.proximity_range_m, robot.preferred_clearance_m), o.cost_penalty,
@@ -304,9 +307,24 @@ class HybridAStar:
     def holonomic(self, goal_xy: tuple[float, float], start_xy: tuple[float, float] | None = None
                   ) -> HolonomicHeuristic:
         """The holonomic cost-to-go table towards ``goal_xy`` (eq. 14g), cut off beyond twice the start's
-        cost when ``start_xy`` is given."""
-        return HolonomicHeuristic(self.holonomic_mult, (self.clearance.origin_x, self.clearance.origin_y),
-                                  self.grid.resolution_m * self.heuristic_factor, goal_xy, start_xy)
+        cost when ``start_xy`` is given.
+
+        Tables are cached per goal cell (Nav2 caches its obstacle heuristic the same way): a replan towards
+        the same goal reuses the table when its start lies inside the part the wavefront settled (any
+        table is admissible everywhere; beyond the cut-off it is only less informed).
+        """
+        cell = self.grid.resolution_m * self.heuristic_factor
+        ox, oy = self.clearance.origin_x, self.clearance.origin_y
+        key = (math.floor((goal_xy[0] - ox) / cell), math.floor((goal_xy[1] - oy) / cell))
+        cached = self._heuristics.get(key)
+        if cached is not None and (start_xy is None or cached(*start_xy) < cached.cutoff):
+            self._heuristics.move_to_end(key)
+            return cached
+        heur = HolonomicHeuristic(self.holonomic_mult, (ox, oy), cell, goal_xy, start_xy)
+        self._heuristics[key] = heur
+        while len(self._heuristics) > HEURISTIC_CACHE_SIZE:
+            self._heuristics.popitem(last=False)
+        return heur
 
     @property
     def resolved_step_m(self) -> float:

@@ -5,6 +5,7 @@ import math
 import numpy as np
 from scipy.spatial import ConvexHull
 
+from planner.hybrid_astar.heuristics import HolonomicHeuristic
 from planner.hybrid_astar.search import HybridAStar, PlannerOptions
 from planner.occupancy import OccupancyGrid
 from planner.robot import load_robot
@@ -78,12 +79,13 @@ def test_cut_off_wavefront_is_a_lower_bound_of_the_full_one():
     grid = OccupancyGrid.from_occupied(occ, 0.05)
     planner = HybridAStar(grid, load_robot())
     goal, start = (3.0, 3.0), (6.0, 4.0)
-    full = planner.holonomic(goal).table
-    cut = planner.holonomic(goal, start).table
+    origin, cell = (planner.clearance.origin_x, planner.clearance.origin_y), 0.05 * planner.heuristic_factor
+    full = HolonomicHeuristic(planner.holonomic_mult, origin, cell, goal).table
+    cut = HolonomicHeuristic(planner.holonomic_mult, origin, cell, goal, start).table
     finite = np.isfinite(full)
     assert np.all(cut[finite] <= full[finite] + 1e-9)
     assert np.isfinite(cut[finite]).all()
-    h_start = planner.holonomic(goal, start)(*start)
+    h_start = HolonomicHeuristic(planner.holonomic_mult, origin, cell, goal, start)(*start)
     near = full <= 1.5 * h_start
     assert np.allclose(cut[near], full[near])
     assert (cut < full - 1e-6).any()  # the far side really was cut off
@@ -132,3 +134,18 @@ def test_reverse_search_uses_reeds_shepp_and_stays_valid():
     assert check_path(grid, planner.robot, result.states, start, goal) == []
     assert (result.states[:, 4] < 0).any()              # it does reverse
     assert result.length_m < 2.0
+
+
+def test_holonomic_tables_are_cached_per_goal_and_replaced_when_the_start_is_beyond_their_cut_off():
+    occ = np.zeros((200, 400), bool)
+    occ[:2] = occ[-2:] = True
+    occ[:, :2] = occ[:, -2:] = True
+    planner = HybridAStar(OccupancyGrid.from_occupied(occ, 0.05), load_robot())
+    goal = (18.0, 5.0)
+    near = planner.holonomic(goal, (15.0, 5.0))
+    assert planner.holonomic((18.01, 5.0), (15.5, 4.0)) is near  # same goal cell, start inside the settled part
+    assert near(1.0, 5.0) == near.cutoff  # the far end of the map lies beyond the cut-off plateau
+    far = planner.holonomic(goal, (1.0, 5.0))
+    assert far is not near and far(1.0, 5.0) < far.cutoff
+    assert far(1.0, 5.0) > near(1.0, 5.0)  # better informed there, and still a lower bound of the true cost
+    assert far(1.0, 5.0) <= 17.0
