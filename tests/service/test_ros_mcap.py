@@ -1,0 +1,163 @@
+"""MCAP out (``--out X.mcap``) and maps in from MCAP / rosbag2, checked with an independent decoder.
+
+The files are written with ``mcap-ros2-support`` (its own CDR encoder); every test reads them back with the
+plain ``mcap`` reader and decodes the CDR with ``rosbags``' type store (a separate CDR implementation with
+its own copy of the ROS 2 Humble message definitions), so a field layout mistake shows up here.
+"""
+
+import json
+import math
+
+import numpy as np
+import pytest
+from mcap.reader import make_reader
+from rosbags.typesys import Stores, get_typestore
+
+from planner.maps.catalogue import default_maps_dir
+from planner.maps.load import load_any
+from service.cli import main
+
+GARAGE = str(default_maps_dir() / "garage.yaml")
+TS = get_typestore(Stores.ROS2_HUMBLE)
+
+
+def decode(path):
+    """``{topic: [(log_time_ns, schema name, message)]}`` decoded by rosbags from the raw CDR."""
+    out = {}
+    with open(path, "rb") as f:
+        reader = make_reader(f)
+        header = reader.get_header()
+        assert header.profile == "ros2"
+        for schema, channel, message in reader.iter_messages(log_time_order=True):
+            assert schema.encoding == "ros2msg" and channel.message_encoding == "cdr"
+            out.setdefault(channel.topic, []).append(
+                (message.log_time, schema.name, TS.deserialize_cdr(message.data, schema.name)))
+    return out
+
+
+def sec(stamp):
+    return stamp.sec + stamp.nanosec * 1e-9
+
+
+def yaw(q):
+    return math.atan2(2 * (q.w * q.z + q.x * q.y), 1 - 2 * (q.y * q.y + q.z * q.z))
+
+
+def run(capsys, *argv):
+    code = main(list(argv))
+    out = capsys.readouterr()
+    return code, out.out, out.err
+
+
+@pytest.fixture(scope="module")
+def plan_mcap(tmp_path_factory):
+    path = tmp_path_factory.mktemp("mcap") / "plan.mcap"
+    code = main(["plan", "--map", GARAGE, "--start", "3.5", "8.05", "0", "--goal", "12", "8.05", "0",
+                 "--out", str(path), "--robot", "zju-60"])
+    assert code == 0
+    return path
+
+
+def test_plan_mcap_holds_map_path_and_footprints(plan_mcap, capsys):
+    code, stdout, _ = run(capsys, "plan", "--map", GARAGE, "--start", "3.5", "8.05", "0", "--goal", "12", "8.05",
+                          "0", "--out", str(plan_mcap.with_name("again.mcap")))
+    assert code == 0
+    plan = json.loads(stdout)  # with --out X.mcap the JSON still goes to stdout
+    msgs = decode(plan_mcap.with_name("again.mcap"))
+    assert {"/map", "/plan", "/plan/footprints", "/plan/start", "/plan/goal"} <= set(msgs)
+
+    # /map: the garage grid, row-major, row 0 at the origin
+    (_, typename, grid_msg), = msgs["/map"]
+    assert typename == "nav_msgs/msg/OccupancyGrid"
+    grid = load_any(GARAGE)
+    info = grid_msg.info
+    assert (info.width, info.height) == (grid.width, grid.height)
+    assert info.resolution == pytest.approx(grid.resolution_m)
+    assert (info.origin.position.x, info.origin.position.y) == pytest.approx(grid.origin[:2])
+    assert grid_msg.header.frame_id == "map"
+    np.testing.assert_array_equal(np.asarray(grid_msg.data).reshape(info.height, info.width), grid.data)
+
+    # /plan: one stamped pose per state, at the plan's times
+    (t_log, typename, path), = msgs["/plan"]
+    assert typename == "nav_msgs/msg/Path"
+    states = plan["states"]
+    assert len(path.poses) == len(states)
+    t0 = sec(path.header.stamp)
+    assert t_log == pytest.approx(t0 * 1e9, abs=1e3)
+    for ps, st in zip(path.poses, states, strict=True):
+        assert ps.header.frame_id == "map"
+        assert (ps.pose.position.x, ps.pose.position.y) == pytest.approx((st["x"], st["y"]))
+        assert math.remainder(yaw(ps.pose.orientation) - st["yaw"], math.tau) == pytest.approx(0, abs=1e-9)
+        assert sec(ps.header.stamp) - t0 == pytest.approx(st["t"], abs=1e-6)
+
+    # /plan/footprints: rectangles of the profile's footprint along the path, plus the path line
+    (_, typename, markers), = msgs["/plan/footprints"]
+    assert typename == "visualization_msgs/msg/MarkerArray"
+    rects = [m for m in markers.markers if m.ns == "footprints"]
+    line = [m for m in markers.markers if m.ns == "path"]
+    assert 0.7 * plan["length_m"] / 0.25 <= len(rects) <= plan["length_m"] / 0.25 + 2 and len(line) == 1
+    assert len(line[0].points) == len(states) and len(line[0].colors) == len(states)
+    fl, fw = plan["robot"]["footprint_length_m"], plan["robot"]["footprint_width_m"]
+    for m in rects:
+        assert m.type == 4 and m.action == 0 and len(m.points) == 5
+        p = [(q.x, q.y) for q in m.points]
+        assert p[0] == pytest.approx(p[-1])
+        assert math.dist(p[0], p[1]) == pytest.approx(fl) and math.dist(p[1], p[2]) == pytest.approx(fw)
+    assert {m.id for m in rects} == set(range(len(rects)))
+
+    (_, _, start), = msgs["/plan/start"]
+    assert (start.pose.position.x, start.pose.position.y) == pytest.approx((3.5, 8.05))
+
+
+def test_plan_reads_its_map_back_from_the_mcap(plan_mcap, capsys):
+    code, stdout, _ = run(capsys, "plan", "--map", str(plan_mcap), "--map-topic", "/map", "--start", "3.5", "8.05",
+                          "0", "--goal", "12", "8.05", "0")
+    assert code == 0
+    assert json.loads(stdout)["status"] == "exact"
+
+
+def test_plan_reads_its_map_from_a_rosbag2_folder(tmp_path, capsys):
+    """A rosbag2 folder written by rosbags (sqlite3 storage, as ``ros2 bag record`` writes by default)."""
+    from rosbags.rosbag2 import Writer
+
+    grid = load_any(GARAGE)
+    msg_t = TS.types["nav_msgs/msg/OccupancyGrid"]
+    Header, Time = TS.types["std_msgs/msg/Header"], TS.types["builtin_interfaces/msg/Time"]
+    MapMetaData, Pose = TS.types["nav_msgs/msg/MapMetaData"], TS.types["geometry_msgs/msg/Pose"]
+    Point, Quaternion = TS.types["geometry_msgs/msg/Point"], TS.types["geometry_msgs/msg/Quaternion"]
+    msg = msg_t(header=Header(stamp=Time(sec=1, nanosec=0), frame_id="map"),
+                info=MapMetaData(map_load_time=Time(sec=1, nanosec=0), resolution=grid.resolution_m,
+                                 width=grid.width, height=grid.height,
+                                 origin=Pose(position=Point(x=grid.origin[0], y=grid.origin[1], z=0.0),
+                                             orientation=Quaternion(x=0.0, y=0.0, z=0.0, w=1.0))),
+                data=np.asarray(grid.data, dtype=np.int8).ravel())
+    bag = tmp_path / "run_bag"
+    with Writer(bag, version=8) as writer:
+        conn = writer.add_connection("/robot/map", "nav_msgs/msg/OccupancyGrid", typestore=TS)
+        writer.write(conn, 1_000_000_000, TS.serialize_cdr(msg, "nav_msgs/msg/OccupancyGrid"))
+    code, stdout, _ = run(capsys, "plan", "--map", str(bag), "--map-topic", "/robot/map", "--start", "3.5", "8.05",
+                          "0", "--goal", "12", "8.05", "0")
+    assert code == 0 and json.loads(stdout)["status"] == "exact"
+
+    code, _, err = run(capsys, "plan", "--map", str(bag), "--start", "3.5", "8.05", "0", "--goal", "12", "8.05", "0")
+    assert code == 2 and "--map-topic" in err and "/robot/map" in err
+
+
+@pytest.mark.parametrize("argv, field", [
+    (["--map-topic", "/nope"], "--map-topic"),
+    (["--map-topic", "/plan"], "--map-topic"),
+])
+def test_bad_map_topic_is_bad_input(plan_mcap, capsys, argv, field):
+    code, _, err = run(capsys, "plan", "--map", str(plan_mcap), *argv, "--start", "3.5", "8.05", "0",
+                       "--goal", "12", "8.05", "0")
+    assert code == 2 and field in err
+
+
+def test_not_an_mcap_is_bad_input(tmp_path, capsys):
+    bad = tmp_path / "x.mcap"
+    bad.write_bytes(b"not an mcap file")
+    code, _, err = run(capsys, "plan", "--map", str(bad), "--start", "3.5", "8.05", "0", "--goal", "12", "8.05", "0")
+    assert code == 2 and "--map" in err
+    code, _, err = run(capsys, "plan", "--map", GARAGE, "--map-topic", "/map", "--start", "3.5", "8.05", "0",
+                       "--goal", "12", "8.05", "0")
+    assert code == 2 and "--map-topic" in err
