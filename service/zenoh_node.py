@@ -39,7 +39,15 @@ from planner.errors import InvalidInput, StartOutsideMap
 from service.core import PlanningService
 from service.outcome import Outcome, error_outcome, outcome_of_exception
 from service.settings import ServiceSettings
-from service.wire import GoalMessage, PlanRequest, PoseIn, ReconfigureIn, SimulateRequest, invalid_input
+from service.wire import (
+    GoalMessage,
+    PlanRequest,
+    PoseIn,
+    PoseMessage,
+    ReconfigureIn,
+    SimulateRequest,
+    invalid_input,
+)
 
 log = logging.getLogger(__name__)
 
@@ -200,7 +208,7 @@ class ZenohNode:
     def _on_pose(self, sample: zenoh.Sample) -> None:
         robot_id = self._robot_id(sample)
         try:
-            pose = parse(PoseIn, sample.payload)
+            pose = parse(PoseMessage, sample.payload).as_pose_in()
         except InvalidInput as exc:
             self._status(robot_id, self._goal_ids.get(robot_id, 0), "invalid_pose", outcome_of_exception(exc))
             return
@@ -229,7 +237,8 @@ class ZenohNode:
         except Exception as exc:
             self._status(robot_id, goal_id, "failed", refusal(exc, f"goal of {robot_id}"))
             return
-        self._status(robot_id, goal_id, "planning", start=pose.model_dump(), goal=goal.goal.model_dump())
+        goal_pose = dict(zip(("x", "y", "yaw"), goal.goal.as_pose(), strict=True))
+        self._status(robot_id, goal_id, "planning", start=pose.model_dump(), goal=goal_pose)
         future.add_done_callback(lambda done: self._goal_done(robot_id, goal_id, done.result()))
 
     def _goal_done(self, robot_id: str, goal_id: int, outcome: Outcome) -> None:
