@@ -243,22 +243,25 @@ def write_reconfiguration_mcap(path: str | Path, result: Mapping[str, Any], grid
 
 def write_schedule_mcap(path: str | Path, plan: Mapping[str, Any], schedule: Mapping[str, Any],
                         t0: float | None = None) -> None:
-    """A VPIP schedule as MCAP: the plan, and per 100 Hz tick the rod lengths (``/vpip/rods``) and the
-    plane angles and roll (``/vpip/plane``) as ``sensor_msgs/JointState`` (names + positions, m / rad)."""
+    """A VPIP schedule as MCAP: the plan it follows, and per 100 Hz tick the rod lengths (``/vpip/rods``, m)
+    and the plane angles and roll (``/vpip/plane``, rad) as ``sensor_msgs/JointState`` (names + positions,
+    Foxglove plots them), and the rolled pose (``/vpip/pose``, PoseStamped)."""
     t0 = time.time() if t0 is None else t0
     series = schedule["series"]
-    times = series["t"]
-    rods = series["rod_lengths_m"]
-    plane_names = [k for k in ("phi_vpip_rad", "theta_vpip_rad", "roll_rad", "pitch_phase_rad") if k in series]
+    rods = [f"rod_{r['index']}_{r['side']}" for r in schedule.get("rods") or []]
+    angles = [k for k in ("roll_desired_rad", "roll_rad", "phi_vpip_rad", "theta_vpip_rad", "pitch_phase_rad")
+              if k in series]
     with McapOut(path) as out:
         _write_plan(out, plan, t0)
-        for i, t in enumerate(times):
-            lengths = rods[i]
-            out.write("/vpip/rods", JOINT_STATE, {"header": header(t0 + t, "base_link"),
-                                                   "name": [f"rod_{j}" for j in range(len(lengths))],
-                                                   "position": [float(v) for v in lengths]}, t0 + t)
-            out.write("/vpip/plane", JOINT_STATE, {"header": header(t0 + t, "base_link"), "name": plane_names,
-                                                    "position": [float(series[k][i]) for k in plane_names]}, t0 + t)
+        for i, t in enumerate(series["t"]):
+            lengths = [float(v) for v in series["rod_length_m"][i]]
+            names = rods if len(rods) == len(lengths) else [f"rod_{j}" for j in range(len(lengths))]
+            out.write("/vpip/rods", JOINT_STATE, {"header": header(t0 + t, "base_link"), "name": names,
+                                                   "position": lengths}, t0 + t)
+            out.write("/vpip/plane", JOINT_STATE, {"header": header(t0 + t, "base_link"), "name": angles,
+                                                    "position": [float(series[k][i]) for k in angles]}, t0 + t)
+            out.write("/vpip/pose", POSE_STAMPED,
+                      pose_stamped(t0 + t, series["x"][i], series["y"][i], series["yaw"][i]), t0 + t)
 
 
 # --------------------------------------------------------------------------------------------- reading

@@ -72,15 +72,20 @@ def is_bag(path: str | Path) -> bool:
     return p.suffix.lower() == ".mcap" or (p.is_dir() and (p / "metadata.yaml").is_file())
 
 
+def read_bag_map(path: str, topic: str | None) -> OccupancyGrid:
+    """The last ``nav_msgs/OccupancyGrid`` on ``topic`` (default ``/map``) of an MCAP file / rosbag2 folder."""
+    from service.ros import MAP_TOPIC, read_map_from_bag
+
+    return read_map_from_bag(path, topic or MAP_TOPIC)
+
+
 def read_map_arg(path: str, topic: str | None, robot: Any = None) -> OccupancyGrid:
     """``--map`` of a verb: a map_server YAML or mesh (``planner.maps.load.load_any``), or with an MCAP
     file / rosbag2 folder the last ``nav_msgs/OccupancyGrid`` on ``--map-topic`` (default ``/map``)."""
     if not Path(path).exists():
         raise InvalidInput("--map", f"{path} does not exist")
     if is_bag(path):
-        from service.ros import MAP_TOPIC, read_map_from_bag
-
-        return read_map_from_bag(path, topic or MAP_TOPIC)
+        return read_bag_map(path, topic)
     if topic is not None:
         raise InvalidInput("--map-topic", "only applies to an MCAP file or a rosbag2 folder given as --map")
     from planner.maps.load import load_any

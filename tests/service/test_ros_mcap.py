@@ -161,3 +161,71 @@ def test_not_an_mcap_is_bad_input(tmp_path, capsys):
     code, _, err = run(capsys, "plan", "--map", GARAGE, "--map-topic", "/map", "--start", "3.5", "8.05", "0",
                        "--goal", "12", "8.05", "0")
     assert code == 2 and "--map-topic" in err
+
+
+@pytest.fixture(scope="module")
+def plan_json(tmp_path_factory):
+    path = tmp_path_factory.mktemp("plan") / "plan.json"
+    assert main(["plan", "--map", GARAGE, "--start", "3.5", "8.05", "0", "--goal", "12", "8.05", "0",
+                 "--out", str(path)]) == 0
+    return path
+
+
+def test_simulation_mcap_holds_executed_and_estimated_poses(plan_json, tmp_path, capsys):
+    out = tmp_path / "sim.mcap"
+    code, stdout, _ = run(capsys, "simulate", "--map", GARAGE, "--path", str(plan_json), "--noise", "none",
+                          "--tracker", "pursuit", "--out", str(out))
+    assert code == 0
+    sim = json.loads(stdout)
+    msgs = decode(out)
+    assert {"/map", "/plan", "/plan/footprints", "/sim/pose", "/sim/estimate", "/sim/trajectory",
+            "/sim/estimate/path"} <= set(msgs)
+    poses = msgs["/sim/pose"]
+    assert len(poses) == len(sim["trajectory"])
+    t0 = sec(msgs["/plan"][0][2].header.stamp)
+    for (t_log, typename, ps), row in zip(poses, sim["trajectory"], strict=True):
+        assert typename == "geometry_msgs/msg/PoseStamped"
+        assert (ps.pose.position.x, ps.pose.position.y) == pytest.approx((row["x"], row["y"]))
+        assert sec(ps.header.stamp) - t0 == pytest.approx(row["t"], abs=1e-6)
+        assert t_log == pytest.approx((t0 + row["t"]) * 1e9, abs=2e3)
+    assert [m[0] for m in poses] == sorted(m[0] for m in poses)  # replayable in time
+    est = msgs["/sim/estimate/path"][0][2]
+    assert len(est.poses) == len(sim["estimate"])
+    assert est.poses[-1].pose.position.x == pytest.approx(sim["estimate"][-1]["x"])
+
+
+def test_reconfiguration_mcap_holds_the_sphere_pose(tmp_path, capsys):
+    out = tmp_path / "rec.mcap"
+    code, stdout, _ = run(capsys, "reconfigure", "--start", "0", "0", "--start-tilt", "30", "75", "--degrees",
+                          "--goal", "1.5", "1.0", "--out", str(out))
+    assert code == 0
+    rec = json.loads(stdout)
+    msgs = decode(out)
+    poses = msgs["/reconfigure/pose"]
+    assert len(poses) == len(rec["samples"]) and "/map" not in msgs
+    last = poses[-1][2].pose
+    assert (last.position.x, last.position.y, last.position.z) == pytest.approx(
+        (rec["final"]["x"], rec["final"]["y"], rec["radius_m"]))
+    assert (last.orientation.w, last.orientation.x, last.orientation.y, last.orientation.z) == pytest.approx(
+        (rec["final"]["qw"], rec["final"]["qx"], rec["final"]["qy"], rec["final"]["qz"]))
+    assert len(msgs["/reconfigure/path"][0][2].poses) == len(rec["samples"])
+
+
+def test_vpip_schedule_mcap_holds_rod_lengths(plan_json, tmp_path, capsys):
+    out, js = tmp_path / "sched.mcap", tmp_path / "sched.json"
+    assert run(capsys, "vpip", "schedule", "--path", str(plan_json), "--robot", "daedalus", "--out", str(js))[0] == 0
+    code, _, _ = run(capsys, "vpip", "schedule", "--path", str(plan_json), "--robot", "daedalus", "--out", str(out))
+    assert code == 0
+    schedule = json.loads(js.read_text())
+    msgs = decode(out)
+    rods, plane = msgs["/vpip/rods"], msgs["/vpip/plane"]
+    series = schedule["series"]
+    assert len(rods) == len(plane) == len(series["t"])
+    i = len(rods) // 2
+    msg = rods[i][2]
+    assert rods[i][1] == "sensor_msgs/msg/JointState"
+    assert list(msg.position) == pytest.approx(series["rod_length_m"][i])
+    assert list(msg.name) == [f"rod_{r['index']}_{r['side']}" for r in schedule["rods"]]
+    angles = dict(zip(plane[i][2].name, plane[i][2].position, strict=True))
+    assert angles["phi_vpip_rad"] == pytest.approx(series["phi_vpip_rad"][i])
+    assert "/plan" in msgs and "/vpip/pose" in msgs
