@@ -109,6 +109,7 @@ class ZenohNode:
         self._lock = threading.Lock()
         self._poses: dict[str, PoseIn] = {}
         self._goal_ids: dict[str, int] = {}
+        self.ros2: Any = None  # the rmw_zenoh face (service.ros2_zenoh), with settings.ros2
         # one entry per queryable capability: key suffix → (request model, submit)
         self.queryables: dict[str, tuple[type[BaseModel], Callable[[Any], Future[Outcome]]]] = {
             "plan": (PlanRequest, service.submit_plan),
@@ -130,11 +131,20 @@ class ZenohNode:
                                                          allowed_origin=zenoh.Locality.REMOTE))
         self._entities.append(session.liveliness().declare_token(f"{PREFIX}/planner/{session.zid()}"))
         log.info("zenoh node %s up: queryables %s", session.zid(), ", ".join(self.queryables))
+        if self.settings.ros2:
+            from service.ros2_zenoh import RmwZenohFace, Ros2Options
+
+            s = self.settings
+            self.ros2 = RmwZenohFace(self.service, session, Ros2Options(
+                domain_id=s.ros2_domain_id, namespace=s.ros2_namespace, map_name=s.ros2_map, robot=s.ros2_robot))
+            self.ros2.start()
 
     def close(self) -> None:
         session, self.session = self.session, None
         if session is None:
             return
+        if self.ros2 is not None:
+            self.ros2.close()
         for entity in reversed(self._entities):
             try:
                 entity.undeclare()
