@@ -129,3 +129,58 @@ def test_ros2_goal_over_zenoh_yields_a_ros2_path(node: tuple[ZenohNode, Planning
     t0 = path.header.stamp.sec + path.header.stamp.nanosec * 1e-9
     last = path.poses[-1].header.stamp
     assert last.sec + last.nanosec * 1e-9 - t0 == pytest.approx(states[-1]["t"], abs=1e-6)
+
+
+def test_zenoh_json_queries_take_ros_messages(node: tuple[ZenohNode, PlanningService, int]) -> None:
+    """The native JSON face: a ``sphereplan/plan`` query with a nav_msgs/OccupancyGrid and PoseStamped poses,
+    and a robot's ``pose`` topic given as a geometry_msgs/Pose."""
+    import json
+
+    import numpy as np
+    import zenoh
+
+    from tests.service.service_harness import hall_grid
+
+    zenoh_node, service, port = node
+    grid = hall_grid()
+    ros_map = {"header": {"frame_id": "map"},
+               "info": {"resolution": grid.resolution_m, "width": grid.width, "height": grid.height,
+                        "origin": {"position": {"x": 0.0, "y": 0.0, "z": 0.0}, "orientation": {"w": 1.0}}},
+               "data": np.asarray(grid.data, dtype=int).ravel().tolist()}
+    conf = zenoh.Config()
+    conf.insert_json5("mode", '"client"')
+    conf.insert_json5("connect/endpoints", json.dumps([f"tcp/127.0.0.1:{port}"]))
+    conf.insert_json5("scouting/multicast/enabled", "false")
+    with zenoh.open(conf) as session:
+        body = {"map": ros_map, "start": stamped(HALL_START), "goal": stamped(HALL_GOAL)}
+        replies = []
+        deadline = time.monotonic() + 120
+        while not replies and time.monotonic() < deadline:
+            replies = list(session.get("sphereplan/plan", payload=json.dumps(body).encode(), timeout=60))
+        assert replies and replies[0].ok is not None, replies
+        result = json.loads(replies[0].ok.payload.to_bytes())
+        assert result["status"] == "exact" and result["map"] == "occupancy_grid"
+
+        bad = {**body, "goal": {**stamped(HALL_GOAL), "header": {"frame_id": "odom"}}}
+        err = next(iter(session.get("sphereplan/plan", payload=json.dumps(bad).encode(), timeout=60))).err
+        assert err is not None and json.loads(err.payload.to_bytes())["field"] == "goal.header.frame_id"
+
+        statuses: list[dict[str, Any]] = []
+        done = threading.Event()
+
+        def on_status(sample: zenoh.Sample) -> None:
+            statuses.append(json.loads(sample.payload.to_bytes()))
+            if statuses[-1]["state"] in ("succeeded", "failed"):
+                done.set()
+
+        sub = session.declare_subscriber("sphereplan/r1/status", on_status)
+        deadline = time.monotonic() + 120
+        while not done.is_set() and time.monotonic() < deadline:
+            session.put("sphereplan/r1/pose", json.dumps(stamped(HALL_START)["pose"]).encode())
+            time.sleep(0.3)
+            session.put("sphereplan/r1/goal", json.dumps({"map": "hall", "goal": stamped(HALL_GOAL)}).encode())
+            done.wait(timeout=15)
+        sub.undeclare()
+    assert statuses and statuses[-1]["state"] == "succeeded", statuses
+    planning = [s for s in statuses if s["state"] == "planning"][-1]
+    assert planning["start"] == pytest.approx({"x": 2.0, "y": 2.0, "yaw": 0.0})
