@@ -37,6 +37,7 @@ from service.core import PlanningService
 from service.outcome import Outcome
 from service.ros import OCCUPANCY_GRID, PATH, POSE_STAMPED, msgdef, path_msg, typestore
 from service.wire import MAP_FRAMES, InlineGrid, PlanRequest, PoseIn
+from service.zenoh_node import undeclare_all
 
 log = logging.getLogger(__name__)
 
@@ -146,12 +147,7 @@ class RmwZenohFace:
                  ", ".join(self.topic[n] for n in ("goal_pose", "pose", "map")), self.topic["plan"])
 
     def close(self) -> None:
-        for entity in reversed(self._entities):
-            try:
-                entity.undeclare()
-            except zenoh.ZError as exc:
-                log.debug("undeclare: %s", exc)
-        self._entities.clear()
+        undeclare_all(self._entities)
 
     # ------------------------------------------------------------------------------ topics in
 

@@ -87,6 +87,17 @@ def parse(model: type[M], payload: zenoh.ZBytes | None) -> M:
         raise invalid_input(exc.errors()) from None
 
 
+def undeclare_all(entities: list[Any]) -> None:
+    """Undeclare ``entities`` (subscribers, queryables, tokens ...) newest first and empty the list; an
+    entity the closing session already dropped is skipped."""
+    for entity in reversed(entities):
+        try:
+            entity.undeclare()
+        except zenoh.ZError as exc:
+            log.debug("undeclare: %s", exc)
+    entities.clear()
+
+
 def refusal(exc: Exception, where: str) -> Outcome:
     """The outcome of a message refused before a job was queued (bad payload or request, busy, or a bug)."""
     outcome = outcome_of_exception(exc)
@@ -145,12 +156,7 @@ class ZenohNode:
             return
         if self.ros2 is not None:
             self.ros2.close()
-        for entity in reversed(self._entities):
-            try:
-                entity.undeclare()
-            except zenoh.ZError as exc:
-                log.debug("undeclare: %s", exc)
-        self._entities.clear()
+        undeclare_all(self._entities)
         session.close()
 
     # ------------------------------------------------------------------------------ queries
