@@ -97,6 +97,19 @@ def test_viewer_plans_in_headless_chromium(server: Server, tmp_path: Path) -> No
             metrics = page.evaluate("window.viewer.sim.metrics")
             assert page.inner_text("#s-rms") == f"{metrics['cross_track_rms_m']:.3f} m"
             page.screenshot(path=str(tmp_path / "viewer.png"))
+
+            # a Spherobot reconfiguration between two new clicks, from the same page
+            page.select_option("#mode", "start")
+            for x, y in ((2.0, 2.0), (3.5, 3.0)):
+                px, py = page.evaluate("([x, y]) => window.viewer.worldToPage(x, y)", [x, y])
+                page.mouse.click(px, py)
+            page.click("#reconfigure")
+            page.wait_for_function("window.viewer.rec !== null || window.viewer.error !== null", timeout=120_000)
+            assert page.evaluate("window.viewer.error") is None
+            rec = page.evaluate("window.viewer.rec")
+            assert rec["status"] == "exact"
+            assert page.inner_text("#r-length") == f"{rec['length_m']:.2f} m"
+            assert math.dist((rec["final"]["x"], rec["final"]["y"]), (3.5, 3.0)) < 0.15
         finally:
             browser.close()
     assert not errors, errors
