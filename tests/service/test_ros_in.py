@@ -12,19 +12,18 @@ import numpy as np
 import pytest
 
 from tests.service import service_harness as harness
-from tests.service.service_harness import HALL_GOAL, HALL_START, Server, hall_grid, plan_body, strip_timing
+from tests.service.service_harness import HALL_GOAL, HALL_START, hall_grid, plan_body, strip_timing
 
 
 @pytest.fixture(scope="module")
-def server() -> Iterator[Server]:
-    yield harness.acquire()
-    harness.release()
-
-
-@pytest.fixture()
-def client(server: Server) -> Iterator[httpx.Client]:
-    with httpx.Client(base_url=server.url, timeout=60) as c:
-        yield c
+def client() -> Iterator[httpx.Client]:
+    """A client of the session's shared ``sphereplan serve`` (tests/service/service_harness.py)."""
+    server = harness.acquire()
+    try:
+        with httpx.Client(base_url=server.url, timeout=60) as c:
+            yield c
+    finally:
+        harness.release()
 
 
 def ros_grid(frame: str = "map") -> dict[str, Any]:
