@@ -52,6 +52,7 @@ from service.wire import (
     PlanIn,
     PlanRequest,
     ReconfigureIn,
+    RosOccupancyGrid,
     SimulateRequest,
     TensegrityStaticRequest,
     VpipRodsRequest,
@@ -212,10 +213,13 @@ class PlanningService:
             raise InvalidInput("options.time_limit_s", f"must be ≤ {limit:g} s on this server")
         return self._submit(plan_job, query, request.robot, self._map_source(request.map))
 
-    def _map_source(self, map_spec: str | InlineGrid) -> Path | InlineGrid:
-        """The file of a named map (checked now), or the inline grid (size checked now)."""
+    def _map_source(self, map_spec: str | InlineGrid | RosOccupancyGrid) -> Path | InlineGrid:
+        """The file of a named map (checked now), or the inline grid (size checked now); a
+        ``nav_msgs/OccupancyGrid`` is taken as the inline grid it describes."""
         if isinstance(map_spec, str):
             return self.resolve_map(map_spec)
+        if isinstance(map_spec, RosOccupancyGrid):
+            map_spec = map_spec.as_inline()
         cells = len(map_spec.data) * len(map_spec.data[0])
         if cells > self.settings.max_inline_cells:
             limit = self.settings.max_inline_cells

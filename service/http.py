@@ -28,6 +28,7 @@ import logging
 from collections.abc import AsyncIterator, Callable
 from concurrent.futures import Future
 from contextlib import asynccontextmanager
+from pathlib import Path
 from typing import Annotated, Any, TypeVar
 
 from fastapi import APIRouter, Depends, FastAPI, Request
@@ -258,6 +259,31 @@ async def get_robots(service: Service) -> list[dict[str, Any]]:
     return service.robots()
 
 
+viewer = APIRouter(tags=["viewer"])
+VIEWER_DIR = Path(__file__).with_name("viewer")
+#: the viewer's files and their media types: everything the page loads comes from here (no CDN)
+VIEWER_FILES = {"index.html": "text/html; charset=utf-8", "viewer.js": "text/javascript; charset=utf-8",
+                "viewer.css": "text/css; charset=utf-8"}
+
+
+def _viewer_file(name: str) -> Response:
+    media_type = VIEWER_FILES.get(name)
+    if media_type is None:
+        return _error(404, f"no viewer file {name!r}", "path")
+    return Response((VIEWER_DIR / name).read_bytes(), media_type=media_type, headers={"Cache-Control": "no-cache"})
+
+
+@viewer.get("/", response_class=Response, include_in_schema=False)
+async def get_viewer() -> Response:
+    """The browser viewer (docs/ros2.md): pick a map and robot, set start and goal, plan, simulate, reconfigure."""
+    return _viewer_file("index.html")
+
+
+@viewer.get("/viewer/{name}", response_class=Response, include_in_schema=False)
+async def get_viewer_file(name: str) -> Response:
+    return _viewer_file(name)
+
+
 # ----------------------------------------------------------------------------------------------- app
 
 
@@ -327,6 +353,7 @@ def create_app(settings: ServiceSettings | None = None, service: PlanningService
     app.include_router(tensegrity)
     app.include_router(maps)
     app.include_router(robots)
+    app.include_router(viewer)
     install_error_handlers(app)
     app.add_middleware(BodyLimit, limit=settings.max_body_bytes)
     return app

@@ -38,6 +38,13 @@ class ServiceSettings:
     zenoh: bool = True
     zenoh_config: Path | None = None
     zenoh_listen: str = "tcp/127.0.0.1:7447"
+    #: ROS 2 over Zenoh in rmw_zenoh's format (service/ros2_zenoh.py): on/off, domain, namespace of the
+    #: topics, the map goals are planned on until a nav_msgs/OccupancyGrid arrives on <ns>/map, the robot
+    ros2: bool = False
+    ros2_domain_id: int = 0
+    ros2_namespace: str = "/"
+    ros2_map: str | None = None
+    ros2_robot: str | None = None
 
     def __post_init__(self) -> None:
         def need(ok: bool, name: str, msg: str) -> None:
@@ -52,6 +59,8 @@ class ServiceSettings:
              f"must be in [1, {MAX_INLINE_CELLS}], got {self.max_inline_cells}")
         need(self.max_body_bytes >= 1024, "max_body_bytes", f"must be ≥ 1024, got {self.max_body_bytes}")
         need(self.retry_after_s >= 1, "retry_after_s", f"must be ≥ 1, got {self.retry_after_s}")
+        need(0 <= self.ros2_domain_id <= 232, "ros2_domain_id", f"must be in [0, 232], got {self.ros2_domain_id}")
+        need(not self.ros2 or self.zenoh, "ros2", "needs the Zenoh node (drop --no-zenoh)")
         if self.zenoh_config is not None:
             need(Path(self.zenoh_config).is_file(), "zenoh_config", f"{self.zenoh_config} is not a file")
 

@@ -19,7 +19,7 @@ import re
 from collections.abc import Sequence
 from typing import Annotated, Any, Literal
 
-from pydantic import BaseModel, ConfigDict, Field, model_validator
+from pydantic import BaseModel, ConfigDict, Discriminator, Field, RootModel, Tag, field_validator, model_validator
 
 from planner.errors import InvalidInput
 from service.settings import MAX_INLINE_CELLS, MAX_TIME_LIMIT_S
@@ -79,15 +79,168 @@ class InlineGrid(_Strict):
         return self
 
 
+
+# ------------------------------------------------------------------------ ROS 2 messages in their JSON form
+# geometry_msgs/Pose, geometry_msgs/PoseStamped and nav_msgs/OccupancyGrid as rosbridge, Foxglove and
+# ``ros2 topic echo --json`` spell them; accepted wherever a pose or a map is (docs/ros2.md).
+
+#: the frames a stamped pose or a map may be in ("" = unset, taken as map)
+MAP_FRAMES = ("", "map", "/map")
+
+
+class RosTime(_Strict):
+    """``builtin_interfaces/Time``."""
+
+    sec: int = Field(default=0, ge=-(2**31), le=2**31 - 1)
+    nanosec: int = Field(default=0, ge=0, le=999_999_999)
+
+
+class RosHeader(_Strict):
+    """``std_msgs/Header``; ``frame_id`` must be the map frame (``map``, or empty)."""
+
+    stamp: RosTime = Field(default_factory=RosTime)
+    frame_id: str = Field(default="", max_length=256)
+
+    @field_validator("frame_id")
+    @classmethod
+    def _map_frame(cls, frame: str) -> str:
+        if frame not in MAP_FRAMES:
+            raise ValueError(f"sphereplan plans in the 'map' frame; got frame_id {frame!r} (transform it first)")
+        return frame
+
+
+class RosPoint(_Strict):
+    """``geometry_msgs/Point`` (z is ignored: the sphere rolls on the map plane)."""
+
+    x: Metres
+    y: Metres
+    z: Metres = 0.0
+
+
+class RosQuaternion(_Strict):
+    """``geometry_msgs/Quaternion``; need not be unit length, must not be zero. Only its yaw is used."""
+
+    x: float = Field(default=0.0, ge=-1e3, le=1e3)
+    y: float = Field(default=0.0, ge=-1e3, le=1e3)
+    z: float = Field(default=0.0, ge=-1e3, le=1e3)
+    w: float = Field(default=1.0, ge=-1e3, le=1e3)
+
+    @model_validator(mode="after")
+    def _not_zero(self) -> RosQuaternion:
+        if math.hypot(self.x, self.y, self.z, self.w) < 1e-9:
+            raise ValueError("the orientation quaternion is zero")
+        return self
+
+    def yaw(self) -> float:
+        return math.atan2(2 * (self.w * self.z + self.x * self.y), 1 - 2 * (self.y * self.y + self.z * self.z))
+
+
+class RosPose(_Strict):
+    """``geometry_msgs/Pose`` in the ``map`` frame."""
+
+    position: RosPoint
+    orientation: RosQuaternion = Field(default_factory=RosQuaternion)
+
+    def as_pose(self) -> tuple[float, float, float]:
+        return self.position.x, self.position.y, self.orientation.yaw()
+
+
+class RosPoseStamped(_Strict):
+    """``geometry_msgs/PoseStamped``; ``header.frame_id`` must be ``map`` (or empty)."""
+
+    header: RosHeader = Field(default_factory=RosHeader)
+    pose: RosPose
+
+    def as_pose(self) -> tuple[float, float, float]:
+        return self.pose.as_pose()
+
+
+def _pose_kind(value: Any) -> str:
+    if isinstance(value, dict | BaseModel):
+        keys = value.keys() if isinstance(value, dict) else type(value).model_fields.keys()
+        if "pose" in keys:
+            return "PoseStamped"
+        if "position" in keys:
+            return "Pose"
+    return "PoseIn"
+
+
+#: a pose as ``{x, y, yaw}``, a ``geometry_msgs/Pose`` or a ``geometry_msgs/PoseStamped`` (told apart by
+#: their keys, so errors name the fields of the form that was sent)
+PoseSpec = Annotated[
+    Annotated[PoseIn, Tag("PoseIn")] | Annotated[RosPose, Tag("Pose")] | Annotated[RosPoseStamped, Tag("PoseStamped")],
+    Discriminator(_pose_kind),
+]
+
+
+class PoseMessage(RootModel[PoseSpec]):
+    """A pose in any of its accepted forms (the Zenoh ``pose`` topic)."""
+
+    def as_pose_in(self) -> PoseIn:
+        x, y, yaw = self.root.as_pose()
+        return PoseIn(x=x, y=y, yaw=yaw)
+
+
+class RosMapMetaData(_Strict):
+    """``nav_msgs/MapMetaData``."""
+
+    map_load_time: RosTime = Field(default_factory=RosTime)
+    resolution: float = Field(ge=0.001, le=100, description="m per cell")
+    width: int = Field(ge=1, le=MAX_INLINE_CELLS)
+    height: int = Field(ge=1, le=MAX_INLINE_CELLS)
+    origin: RosPose = Field(description="pose of the lower-left corner of cell (0, 0)")
+
+
+class RosOccupancyGrid(_Strict):
+    """``nav_msgs/OccupancyGrid`` in its ROS JSON form: ``data`` row-major, ``width`` cells per row, row 0 at
+    the origin, values 0..100 or −1 (unknown); at most ``MAX_INLINE_CELLS`` cells."""
+
+    header: RosHeader = Field(default_factory=RosHeader)
+    info: RosMapMetaData
+    data: list[Annotated[int, Field(ge=-1, le=100)]] = Field(min_length=1, max_length=MAX_INLINE_CELLS)
+
+    @model_validator(mode="after")
+    def _size(self) -> RosOccupancyGrid:
+        cells = self.info.width * self.info.height
+        if cells > MAX_INLINE_CELLS:
+            raise ValueError(f"info.width × info.height = {cells} cells; at most {MAX_INLINE_CELLS} are accepted")
+        if len(self.data) != cells:
+            raise ValueError(f"data has {len(self.data)} values; info.width × info.height = {cells}")
+        return self
+
+    def as_inline(self) -> InlineGrid:
+        w, h = self.info.width, self.info.height
+        x, y, yaw = self.info.origin.as_pose()
+        return InlineGrid(data=[self.data[i * w:(i + 1) * w] for i in range(h)], resolution_m=self.info.resolution,
+                          origin=[x, y, yaw], name="occupancy_grid")
+
+
+def _map_kind(value: Any) -> str:
+    if isinstance(value, str):
+        return "str"
+    if isinstance(value, RosOccupancyGrid) or (isinstance(value, dict) and "info" in value):
+        return "OccupancyGrid"
+    return "InlineGrid"
+
+
+#: a map: a name in the maps folder, an inline grid, or a ``nav_msgs/OccupancyGrid`` (told apart by form)
+MapSpec = Annotated[
+    Annotated[Name, Tag("str")] | Annotated[InlineGrid, Tag("InlineGrid")]
+    | Annotated[RosOccupancyGrid, Tag("OccupancyGrid")],
+    Discriminator(_map_kind),
+]
+
+
 OptionValue = bool | int | float
 
 
 class PlanRequest(_Strict):
     """``POST /v1/plan`` and the ``sphereplan/plan`` query: plan from ``start`` to ``goal``."""
 
-    map: Name | InlineGrid = Field(description="name of a map in the maps folder (GET /v1/maps), or an inline grid")
-    start: PoseIn
-    goal: PoseIn
+    map: MapSpec = Field(description="name of a map in the maps folder (GET /v1/maps), an inline grid, or a "
+                                     "nav_msgs/OccupancyGrid")
+    start: PoseSpec = Field(description="{x, y, yaw}, a geometry_msgs/Pose or a geometry_msgs/PoseStamped (map frame)")
+    goal: PoseSpec = Field(description="{x, y, yaw}, a geometry_msgs/Pose or a geometry_msgs/PoseStamped (map frame)")
     robot: Name | None = Field(default=None, description="built-in profile name (GET /v1/robots); default zju-60")
     time_limit_s: float | None = Field(default=None, gt=0, le=MAX_TIME_LIMIT_S, description="s; default 5")
     options: dict[Annotated[str, Field(max_length=64)], OptionValue] | None = Field(
@@ -98,13 +251,13 @@ class PlanRequest(_Strict):
 class GoalMessage(_Strict):
     """Payload of ``sphereplan/<robot_id>/goal``: plan from the robot's latest pose to ``goal``."""
 
-    map: Name | InlineGrid
-    goal: PoseIn
+    map: MapSpec
+    goal: PoseSpec
     robot: Name | None = None
     time_limit_s: float | None = Field(default=None, gt=0, le=MAX_TIME_LIMIT_S)
     options: dict[Annotated[str, Field(max_length=64)], OptionValue] | None = Field(default=None, max_length=64)
 
-    def plan_request(self, start: PoseIn) -> PlanRequest:
+    def plan_request(self, start: PoseIn | RosPose | RosPoseStamped) -> PlanRequest:
         return PlanRequest(map=self.map, start=start, goal=self.goal, robot=self.robot,
                            time_limit_s=self.time_limit_s, options=self.options)
 
@@ -149,7 +302,7 @@ class SimulateRequest(_Strict):
     """``POST /v1/simulate`` and the ``sphereplan/simulate`` query: roll ``path`` (a plan result) in
     closed loop on ``map``, as ``sphereplan simulate --map M --path PLAN.json`` does."""
 
-    map: Name | InlineGrid
+    map: MapSpec
     path: PlanIn
     robot: Name | None = Field(default=None, description="default: the plan's robot")
     seed: int = Field(default=0, ge=0, le=2**32 - 1, description="seeds every disturbance")
@@ -191,7 +344,7 @@ class ReconfigureIn(_Strict):
     radius_m: float | None = Field(default=None, gt=0, le=100)
     roll_rate_rad_s: float | None = Field(default=None, gt=0, le=1000)
     degrees: bool = False
-    map: Name | InlineGrid | None = None
+    map: MapSpec | None = None
     allow_unknown: bool = False
 
 

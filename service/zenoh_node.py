@@ -39,7 +39,15 @@ from planner.errors import InvalidInput, StartOutsideMap
 from service.core import PlanningService
 from service.outcome import Outcome, error_outcome, outcome_of_exception
 from service.settings import ServiceSettings
-from service.wire import GoalMessage, PlanRequest, PoseIn, ReconfigureIn, SimulateRequest, invalid_input
+from service.wire import (
+    GoalMessage,
+    PlanRequest,
+    PoseIn,
+    PoseMessage,
+    ReconfigureIn,
+    SimulateRequest,
+    invalid_input,
+)
 
 log = logging.getLogger(__name__)
 
@@ -79,6 +87,17 @@ def parse(model: type[M], payload: zenoh.ZBytes | None) -> M:
         raise invalid_input(exc.errors()) from None
 
 
+def undeclare_all(entities: list[Any]) -> None:
+    """Undeclare ``entities`` (subscribers, queryables, tokens ...) newest first and empty the list; an
+    entity the closing session already dropped is skipped."""
+    for entity in reversed(entities):
+        try:
+            entity.undeclare()
+        except zenoh.ZError as exc:
+            log.debug("undeclare: %s", exc)
+    entities.clear()
+
+
 def refusal(exc: Exception, where: str) -> Outcome:
     """The outcome of a message refused before a job was queued (bad payload or request, busy, or a bug)."""
     outcome = outcome_of_exception(exc)
@@ -101,6 +120,7 @@ class ZenohNode:
         self._lock = threading.Lock()
         self._poses: dict[str, PoseIn] = {}
         self._goal_ids: dict[str, int] = {}
+        self.ros2: Any = None  # the rmw_zenoh face (service.ros2_zenoh), with settings.ros2
         # one entry per queryable capability: key suffix → (request model, submit)
         self.queryables: dict[str, tuple[type[BaseModel], Callable[[Any], Future[Outcome]]]] = {
             "plan": (PlanRequest, service.submit_plan),
@@ -122,17 +142,21 @@ class ZenohNode:
                                                          allowed_origin=zenoh.Locality.REMOTE))
         self._entities.append(session.liveliness().declare_token(f"{PREFIX}/planner/{session.zid()}"))
         log.info("zenoh node %s up: queryables %s", session.zid(), ", ".join(self.queryables))
+        if self.settings.ros2:
+            from service.ros2_zenoh import RmwZenohFace, Ros2Options
+
+            s = self.settings
+            self.ros2 = RmwZenohFace(self.service, session, Ros2Options(
+                domain_id=s.ros2_domain_id, namespace=s.ros2_namespace, map_name=s.ros2_map, robot=s.ros2_robot))
+            self.ros2.start()
 
     def close(self) -> None:
         session, self.session = self.session, None
         if session is None:
             return
-        for entity in reversed(self._entities):
-            try:
-                entity.undeclare()
-            except zenoh.ZError as exc:
-                log.debug("undeclare: %s", exc)
-        self._entities.clear()
+        if self.ros2 is not None:
+            self.ros2.close()
+        undeclare_all(self._entities)
         session.close()
 
     # ------------------------------------------------------------------------------ queries
@@ -200,7 +224,7 @@ class ZenohNode:
     def _on_pose(self, sample: zenoh.Sample) -> None:
         robot_id = self._robot_id(sample)
         try:
-            pose = parse(PoseIn, sample.payload)
+            pose = parse(PoseMessage, sample.payload).as_pose_in()
         except InvalidInput as exc:
             self._status(robot_id, self._goal_ids.get(robot_id, 0), "invalid_pose", outcome_of_exception(exc))
             return
@@ -229,7 +253,8 @@ class ZenohNode:
         except Exception as exc:
             self._status(robot_id, goal_id, "failed", refusal(exc, f"goal of {robot_id}"))
             return
-        self._status(robot_id, goal_id, "planning", start=pose.model_dump(), goal=goal.goal.model_dump())
+        goal_pose = dict(zip(("x", "y", "yaw"), goal.goal.as_pose(), strict=True))
+        self._status(robot_id, goal_id, "planning", start=pose.model_dump(), goal=goal_pose)
         future.add_done_callback(lambda done: self._goal_done(robot_id, goal_id, done.result()))
 
     def _goal_done(self, robot_id: str, goal_id: int, outcome: Outcome) -> None:

@@ -6,10 +6,12 @@ import argparse
 import json
 import math
 import sys
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
 from planner.errors import InvalidInput
+from planner.occupancy import OccupancyGrid
 
 
 def finite_float(text: str) -> float:
@@ -48,3 +50,44 @@ def read_json_file(path: str | Path, field: str) -> Any:
         return json.loads(p.read_text())
     except (json.JSONDecodeError, UnicodeDecodeError) as exc:
         raise InvalidInput(field, f"{p} is not valid JSON: {exc}") from None
+
+
+def is_mcap_out(out: str | Path | None) -> bool:
+    return out is not None and str(out).lower().endswith(".mcap")
+
+
+def emit_result(result: Any, out: str | Path | None, write_mcap: Callable[[str], None]) -> None:
+    """``--out``: a name ending in ``.mcap`` gets ROS 2 messages (``write_mcap(out)``) and the JSON goes to
+    stdout; any other name gets the JSON; no name prints the JSON."""
+    if out is not None and is_mcap_out(out):
+        write_mcap(str(out))
+        emit_json(result, None)
+    else:
+        emit_json(result, out)
+
+
+def is_bag(path: str | Path) -> bool:
+    """An MCAP file or a rosbag2 folder (holds ``metadata.yaml``)."""
+    p = Path(path)
+    return p.suffix.lower() == ".mcap" or (p.is_dir() and (p / "metadata.yaml").is_file())
+
+
+def read_bag_map(path: str, topic: str | None) -> OccupancyGrid:
+    """The last ``nav_msgs/OccupancyGrid`` on ``topic`` (default ``/map``) of an MCAP file / rosbag2 folder."""
+    from service.ros import MAP_TOPIC, read_map_from_bag
+
+    return read_map_from_bag(path, topic or MAP_TOPIC)
+
+
+def read_map_arg(path: str, topic: str | None, robot: Any = None) -> OccupancyGrid:
+    """``--map`` of a verb: a map_server YAML or mesh (``planner.maps.load.load_any``), or with an MCAP
+    file / rosbag2 folder the last ``nav_msgs/OccupancyGrid`` on ``--map-topic`` (default ``/map``)."""
+    if not Path(path).exists():
+        raise InvalidInput("--map", f"{path} does not exist")
+    if is_bag(path):
+        return read_bag_map(path, topic)
+    if topic is not None:
+        raise InvalidInput("--map-topic", "only applies to an MCAP file or a rosbag2 folder given as --map")
+    from planner.maps.load import load_any
+
+    return load_any(path, robot)

@@ -4,25 +4,27 @@ from __future__ import annotations
 
 import argparse
 import json
-from pathlib import Path
 from typing import Any
 
 from planner.errors import InvalidInput, PlanningError
 from planner.hybrid_astar.plot import plot_plan
 from planner.hybrid_astar.search import PlannerOptions
-from planner.maps.load import load_any
 from planner.result import failure_json
 from planner.robot import load_robot
-from service.cli._io import emit_json, finite_float, positive_float
+from service.cli._io import emit_result, finite_float, positive_float, read_map_arg
 from service.outcome import EXIT_OK
 from service.pipeline import PlanQuery, execute_plan
+from service.ros import write_plan_mcap
 
 VERB = "plan"
 HELP = "plan a path the sphere can roll from START to GOAL on a map"
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("--map", required=True, help="map file: ROS map_server YAML, or a mesh (.stl/.obj/.ply)")
+    parser.add_argument("--map", required=True, help="map file: ROS map_server YAML, a mesh (.stl/.obj/.ply), "
+                        "or an MCAP file / rosbag2 folder holding a nav_msgs/OccupancyGrid (see --map-topic)")
+    parser.add_argument("--map-topic", default=None, help="topic of the OccupancyGrid in an MCAP/rosbag2 --map "
+                        "(default /map)")
     parser.add_argument("--start", required=True, nargs=3, type=finite_float, metavar=("X", "Y", "YAW"))
     parser.add_argument("--goal", required=True, nargs=3, type=finite_float, metavar=("X", "Y", "YAW"))
     parser.add_argument("--robot", default=None, help="built-in profile name (default zju-60) or a TOML file")
@@ -32,7 +34,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     direction.add_argument("--reverse", action="store_true",
                            help="allow reversing (the default for robots whose profile says reversible, as spheres)")
     direction.add_argument("--forward-only", action="store_true", help="never reverse")
-    parser.add_argument("--out", default=None, help="write the JSON here instead of stdout")
+    parser.add_argument("--out", default=None, help="write the JSON here instead of stdout; a name ending in .mcap "
+                        "writes ROS 2 messages (/map, /plan, /plan/footprints) and prints the JSON")
     parser.add_argument("--plot", default=None, help="write a PNG of the plan")
     parser.set_defaults(func=run)
 
@@ -55,20 +58,25 @@ def _query(args: argparse.Namespace) -> PlanQuery:
     return PlanQuery((x0, y0, yaw0), (x1, y1, yaw1), PlannerOptions.from_dict(options), args.time_limit)
 
 
+def _pose(p: tuple[float, float, float]) -> dict[str, float]:
+    return {"x": p[0], "y": p[1], "yaw": p[2]}
+
+
 def run(args: argparse.Namespace) -> int:
     robot = load_robot(args.robot)
     query = _query(args)  # before the map is read
-    if not Path(args.map).exists():
-        raise InvalidInput("--map", f"{args.map} does not exist")
-    grid = load_any(args.map, robot)
+    grid = read_map_arg(args.map, args.map_topic, robot)
     try:
         result = execute_plan(query, grid, robot)
     except PlanningError as exc:  # the failed result is printed too; the exit code is the error's (service.outcome)
-        emit_json(failure_json(exc.code, exc.msg, robot, exc.planning_time_s, exc.expansions), args.out)
+        emit_result(failure_json(exc.code, exc.msg, robot, exc.planning_time_s, exc.expansions), args.out,
+                    lambda out: write_plan_mcap(
+                        out, {"start": _pose(query.start), "goal": _pose(query.goal), "robot": robot.to_json()}, grid))
         if args.plot:
             plot_plan(grid, robot, None, query.start, query.goal, args.plot, title=f"{grid.name}: no path ({exc.code})")
         raise
-    emit_json(result.to_json(), args.out)
+    body = result.to_json()
+    emit_result(body, args.out, lambda out: write_plan_mcap(out, body, grid))
     if args.plot:
         plot_plan(grid, robot, result.states, query.start, query.goal, args.plot,
                   title=f"{grid.name}: {robot.name}, {result.length_m:.2f} m in {result.planning_time_s * 1000:.0f} ms")

@@ -8,7 +8,8 @@ from typing import Any
 from planner.occupancy import OccupancyGrid
 from planner.spherobot.reconfigure import plan_reconfiguration
 from planner.spherobot.request import METHODS, ReconfigureRequest
-from service.cli._io import emit_json, finite_float, positive_float
+from service.cli._io import emit_result, finite_float, is_bag, positive_float, read_bag_map
+from service.ros import write_reconfiguration_mcap
 
 VERB = "reconfigure"
 HELP = "Plan a Spherobot reconfiguration (position, P on top, optional heading) and prove it by rolling."
@@ -47,10 +48,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--degrees", action="store_true", help="input angles are in degrees (output stays radians)"
     )
-    parser.add_argument("--map", metavar="M.yaml", help="check the swept sphere against this map")
+    parser.add_argument("--map", metavar="M.yaml", help="check the swept sphere against this map (map_server YAML, "
+                        "or an MCAP file / rosbag2 folder with a nav_msgs/OccupancyGrid)")
+    parser.add_argument("--map-topic", metavar="TOPIC", help="topic of the map in an MCAP/rosbag2 --map (/map)")
     parser.add_argument("--allow-unknown", action="store_true", help="treat unknown map cells as free")
     parser.add_argument("--plot", metavar="F.png", help="draw the ground path and P's track on the sphere")
-    parser.add_argument("--out", metavar="F.json", help="write the JSON here instead of stdout")
+    parser.add_argument("--out", metavar="F.json", help="write the JSON here instead of stdout; a name ending in "
+                        ".mcap writes ROS 2 messages (the sphere's pose over time, its path) and prints the JSON")
     parser.set_defaults(func=run)
 
 
@@ -79,9 +83,11 @@ def request_from_args(args: argparse.Namespace) -> dict[str, Any]:
 
 
 def run(args: argparse.Namespace) -> int:
-    grid = _load_map(args.map) if args.map else None
+    grid = None
+    if args.map:
+        grid = read_bag_map(args.map, args.map_topic) if is_bag(args.map) else _load_map(args.map)
     result = plan_reconfiguration(ReconfigureRequest.from_dict(request_from_args(args)), grid=grid)
-    emit_json(result, args.out)
+    emit_result(result, args.out, lambda out: write_reconfiguration_mcap(out, result, grid))
     if args.plot:
         from planner.spherobot.plot import plot_reconfiguration
 

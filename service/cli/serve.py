@@ -48,6 +48,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--zenoh-listen", default="tcp/127.0.0.1:7447", metavar="ENDPOINT",
                         help="listen endpoint of the default peer (default tcp/127.0.0.1:7447)")
     parser.add_argument("--no-zenoh", action="store_true", help="HTTP only")
+    parser.add_argument("--ros2", action="store_true", help="also speak ROS 2 over Zenoh (rmw_zenoh format): "
+                        "<ns>/goal_pose, <ns>/pose, <ns>/map in, <ns>/plan out (docs/ros2.md)")
+    parser.add_argument("--ros2-domain", type=int, default=0, metavar="ID", help="ROS_DOMAIN_ID (default 0)")
+    parser.add_argument("--ros2-namespace", default="/", metavar="NS", help="namespace of the ROS 2 topics (/)")
+    parser.add_argument("--ros2-map", default=None, metavar="NAME",
+                        help="map (in the maps folder) goals are planned on until a map arrives on <ns>/map")
+    parser.add_argument("--ros2-robot", default=None, metavar="NAME", help="robot profile for ROS 2 goals")
     parser.add_argument("--workers", type=_count, default=2, help="planning processes (default 2)")
     parser.add_argument("--max-in-flight", type=_count, default=0,
                         help="jobs queued or running before 503 (default 4 per worker)")
@@ -67,7 +74,9 @@ def settings_from_args(args: argparse.Namespace) -> ServiceSettings:
         raise InvalidInput("--zenoh-config", f"{zenoh_config} is not a file")
     return ServiceSettings(maps_dir=maps_dir, workers=args.workers, max_in_flight=args.max_in_flight,
                            max_time_limit_s=args.max_time_limit, zenoh=not args.no_zenoh,
-                           zenoh_config=zenoh_config, zenoh_listen=args.zenoh_listen)
+                           zenoh_config=zenoh_config, zenoh_listen=args.zenoh_listen, ros2=args.ros2,
+                           ros2_domain_id=args.ros2_domain, ros2_namespace=args.ros2_namespace,
+                           ros2_map=args.ros2_map, ros2_robot=args.ros2_robot)
 
 
 def run(args: argparse.Namespace) -> int:

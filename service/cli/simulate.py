@@ -15,7 +15,8 @@ from typing import Any
 import numpy as np
 
 from planner.errors import InvalidInput
-from service.cli._io import emit_json, positive_float, read_json_file
+from service.cli._io import emit_result, is_bag, positive_float, read_bag_map, read_json_file
+from service.ros import write_simulation_mcap
 
 VERB = "simulate"
 HELP = "roll a plan in closed loop (paper 001 MPC + odometry/GNSS fusion) and report tracking metrics"
@@ -48,8 +49,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     src.add_argument("--bench", action="store_true", help="print the MPC step-time table and exit")
     parser.add_argument(
-        "--map", metavar="M.yaml", help="ROS map_server YAML (optional with --track: open field)"
+        "--map", metavar="M.yaml", help="ROS map_server YAML, or an MCAP file / rosbag2 folder with a "
+        "nav_msgs/OccupancyGrid (optional with --track: open field)"
     )
+    parser.add_argument("--map-topic", metavar="TOPIC", help="topic of the map in an MCAP/rosbag2 --map (/map)")
     parser.add_argument("--robot", metavar="P", help="robot profile name or TOML (default: the plan's robot)")
     parser.add_argument("--seed", type=_seed, default=0, help="seed of every disturbance (default 0)")
     parser.add_argument("--noise", choices=("none", "default"), default="default", help="disturbances")
@@ -71,7 +74,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--time-limit", type=positive_float, metavar="S", help="stop after S simulated seconds"
     )
-    parser.add_argument("--out", metavar="SIM.json", help="write the result here (default: stdout)")
+    parser.add_argument("--out", metavar="SIM.json", help="write the result here (default: stdout); a name ending "
+                        "in .mcap writes ROS 2 messages (map, plan, executed and estimated poses) and prints the JSON")
     parser.add_argument("--plot", metavar="SIM.png", help="also draw the run")
     parser.set_defaults(func=run)
 
@@ -106,7 +110,9 @@ def run(args: argparse.Namespace) -> int:
     if not args.path and not args.track:
         raise InvalidInput("path", "give --path PLAN.json or --track")
     given = _read_plan(args.path) if args.path else None
-    if args.map:
+    if args.map and is_bag(args.map):
+        grid = read_bag_map(args.map, args.map_topic)
+    elif args.map:
         from planner.maps.nav2 import load_map  # the map loader (ROS map_server YAML + PGM)
 
         grid = load_map(args.map)
@@ -143,7 +149,7 @@ def run(args: argparse.Namespace) -> int:
         from planner.closed_loop.plot import plot_simulation
 
         plot_simulation(grid, plan, result, args.plot)
-    emit_json(result, args.out)
+    emit_result(result, args.out, lambda out: write_simulation_mcap(out, plan, result, grid))
     m = result["metrics"]
     if args.out:
         sys.stderr.write(

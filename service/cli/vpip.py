@@ -11,7 +11,7 @@ from planner.errors import InvalidInput
 from planner.robot import load_robot
 from planner.vpip import api
 from planner.vpip.cascade import PLANTS
-from service.cli._io import emit_json, finite_float, positive_float, read_json_file
+from service.cli._io import emit_json, finite_float, is_mcap_out, positive_float, read_json_file
 
 VERB = "vpip"
 HELP = "VPIP rod driver for rod-driven spheres (daedalus): rods, radius, roll, calibrate, schedule, circle"
@@ -101,7 +101,12 @@ def _circle(args: argparse.Namespace) -> int:
 def _schedule(args: argparse.Namespace) -> int:
     plan: Any = read_json_file(args.path, "path")
     result = api.schedule_report(plan, args.robot, args.driver, args.plant)
-    emit_json(result, args.out)
+    if is_mcap_out(args.out):
+        from service.ros import write_schedule_mcap
+
+        write_schedule_mcap(args.out, plan, result)
+    else:
+        emit_json(result, args.out)
     if args.plot:
         from planner.vpip.plot import plot_schedule
 
@@ -159,7 +164,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     sched.add_argument(
         "--path", required=True, help="planner result JSON (states x, y, yaw, roll, v, t, s, curvature)"
     )
-    sched.add_argument("--out", required=True, help="write the time series JSON here")
+    sched.add_argument("--out", required=True, help="write the time series JSON here; a name ending in .mcap "
+                       "writes ROS 2 messages (rod lengths and plane angles as JointState, the plan)")
     sched.add_argument("--plot", help="write a PNG: rod-length heat map, roll and plane angles, path")
     sched.add_argument(
         "--driver", choices=("vpip", "simple"), default="vpip", help="rod driver (default vpip)"
