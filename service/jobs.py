@@ -8,14 +8,16 @@ A computation that meets an error is answered as the outcome table says (:mod:`s
 from __future__ import annotations
 
 import logging
+import math
 import os
+import time
 from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from planner.errors import InvalidInput, PlanningError, SpherePlanError
+from planner.errors import InvalidInput, PlannerTimedOut, PlanningError, SpherePlanError
 from planner.occupancy import OccupancyGrid
 from planner.robot import load_robot
 from service.grids import load_grid
@@ -29,6 +31,20 @@ if TYPE_CHECKING:
     from service.wire import InlineGrid
 
 log = logging.getLogger(__name__)
+
+#: the worker's cancel flag (a shared byte the supervising pool sets), when running in a SupervisedPool
+_CANCEL_FLAG: Any = None
+
+
+def set_cancel_flag(flag: Any) -> None:
+    """Called once in each worker process by :mod:`service.pool` with the flag it sets to cancel a job."""
+    global _CANCEL_FLAG
+    _CANCEL_FLAG = flag
+
+
+def cancelled() -> bool:
+    """True once the pool asked this worker to stop its job (the planner polls it between search chunks)."""
+    return _CANCEL_FLAG is not None and bool(_CANCEL_FLAG.value)
 
 
 def worker_init() -> None:
@@ -68,6 +84,12 @@ def _job(name: str, compute: Callable[[], Any], plan_robot: Callable[[], Any] | 
         return outcome_of_exception(exc, plan_robot() if plan_robot is not None else None)
     except SpherePlanError as exc:
         return outcome_of_exception(exc)
+    except MemoryError:
+        log.warning("%s: the job reached the per-worker memory ceiling", name)
+        return error_outcome(InvalidInput, f"the {name} computation needs more memory than this server allows "
+                                           "per job; ask for less (a coarser grid, fewer states, a closer goal)")
+    except RecursionError:
+        return error_outcome(InvalidInput, f"the {name} input is nested too deeply")
     except (ValueError, ArithmeticError) as exc:
         log.warning("%s: computation failed for a request", name, exc_info=True)
         return error_outcome(InvalidInput, f"the {name} computation failed for this input: {type(exc).__name__}: {exc}")
@@ -76,13 +98,46 @@ def _job(name: str, compute: Callable[[], Any], plan_robot: Callable[[], Any] | 
         return outcome_of_exception(exc)
 
 
+#: most states a plan result may hold (~100 bytes of JSON each: a 20 MB reply)
+MAX_RESULT_STATES = 200_000
+#: a plan is assumed at most this many map diagonals (plus the start–goal distance) long when bounding its states
+MAX_DETOUR_DIAGONALS = 4
+
+
+def check_result_size(query: PlanQuery, grid: OccupancyGrid) -> None:
+    """Refuse, before planning, a plan whose result could hold more than ``MAX_RESULT_STATES`` states.
+
+    The result holds one state every ``options.state_spacing_m`` along the path; the path is taken to be at
+    most the start–goal distance plus ``MAX_DETOUR_DIAGONALS`` diagonals of the map long.
+    """
+    height, width = grid.data.shape
+    diagonal = math.hypot(width, height) * grid.resolution_m
+    distance = math.dist(query.start[:2], query.goal[:2])
+    spacing = query.options.state_spacing_m
+    states = (distance + MAX_DETOUR_DIAGONALS * diagonal) / spacing
+    if states > MAX_RESULT_STATES:
+        least = (distance + MAX_DETOUR_DIAGONALS * diagonal) / MAX_RESULT_STATES
+        raise InvalidInput("options.state_spacing_m", f"{spacing:g} m could return up to {states:.3g} states on "
+                                                      f"this map; this server returns at most {MAX_RESULT_STATES} "
+                                                      f"(use ≥ {least:.3g} m)")
+
+
 def plan_job(query: PlanQuery, robot_name: str | None, source: Path | InlineGrid) -> Outcome:
     """One plan, the pipeline of ``sphereplan plan``: load the robot and the grid, then
     :func:`service.pipeline.execute_plan`."""
 
     def compute() -> dict[str, Any]:
+        t0 = time.perf_counter()
         robot = load_robot(robot_name)
-        return execute_plan(query, load_grid(source, robot_name), robot).to_json()
+        grid = load_grid(source, robot_name)
+        check_result_size(query, grid)
+        result = execute_plan(query, grid, robot, cancel=cancelled).to_json()
+        # the time limit covers the whole job, result building included, not only the search
+        limit = query.effective_time_limit_s
+        elapsed = time.perf_counter() - t0
+        if elapsed > limit:
+            raise PlannerTimedOut(f"the plan took {elapsed:.3g} s, over its time limit of {limit:g} s")
+        return result
 
     return _job("plan", compute, plan_robot=lambda: load_robot(robot_name).to_json())
 

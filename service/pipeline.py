@@ -8,6 +8,7 @@ through. Kept free of pydantic and the web stack so that the CLI's cold start st
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, replace
 
 from planner.hybrid_astar.plan import plan_path
@@ -27,14 +28,21 @@ class PlanQuery:
     options: PlannerOptions
     time_limit_s: float | None = None
 
+    @property
+    def effective_time_limit_s(self) -> float:
+        """The limit the plan runs under: the request's own, else the options'."""
+        return float(self.options.time_limit_s if self.time_limit_s is None else self.time_limit_s)
 
-def execute_plan(query: PlanQuery, grid: OccupancyGrid, robot: RobotProfile) -> PlanResult:
+
+def execute_plan(query: PlanQuery, grid: OccupancyGrid, robot: RobotProfile,
+                 cancel: Callable[[], bool] | None = None) -> PlanResult:
     """Plan ``query`` on ``grid``.
 
     The time limit is passed to the planner per call rather than baked into the options, so that the
     cached planner (distance transform, heuristic grid) is reused across requests with different limits.
-    Raises the typed planning errors.
+    ``cancel`` is polled between search chunks (:class:`~planner.errors.PlannerCancelled` when it says
+    True). Raises the typed planning errors.
     """
-    time_limit = query.options.time_limit_s if query.time_limit_s is None else query.time_limit_s
     options = replace(query.options, time_limit_s=PlannerOptions.time_limit_s)
-    return plan_path(grid, robot, query.start, query.goal, options, time_limit_s=float(time_limit))
+    return plan_path(grid, robot, query.start, query.goal, options, time_limit_s=query.effective_time_limit_s,
+                     cancel=cancel)

@@ -24,7 +24,9 @@ class ServiceSettings:
 
     ``maps_dir`` None means the shipped maps (:func:`planner.maps.catalogue.default_maps_dir`).
     ``max_in_flight`` 0 means 4 jobs per worker. ``zenoh_listen`` is the default peer's only endpoint
-    (ignored when ``zenoh_config`` names a Zenoh config file). ``max_body_bytes`` bounds HTTP bodies.
+    (ignored when ``zenoh_config`` names a Zenoh config file). ``max_body_bytes`` bounds HTTP bodies and
+    Zenoh payloads. ``worker_memory_mb`` is each worker process's address-space ceiling (0: none): a job
+    that reaches it is answered as bad input instead of growing until the machine kills something.
     """
 
     maps_dir: Path | None = None
@@ -34,6 +36,7 @@ class ServiceSettings:
     max_inline_cells: int = MAX_INLINE_CELLS
     max_body_bytes: int = 4_000_000
     retry_after_s: int = 1
+    worker_memory_mb: int = 2048
     warm_up: bool = True
     zenoh: bool = True
     zenoh_config: Path | None = None
@@ -51,6 +54,8 @@ class ServiceSettings:
         need(1 <= self.max_inline_cells <= MAX_INLINE_CELLS, "max_inline_cells",
              f"must be in [1, {MAX_INLINE_CELLS}], got {self.max_inline_cells}")
         need(self.max_body_bytes >= 1024, "max_body_bytes", f"must be ≥ 1024, got {self.max_body_bytes}")
+        need(self.worker_memory_mb == 0 or self.worker_memory_mb >= 512, "worker_memory_mb",
+             f"must be 0 (no ceiling) or ≥ 512, got {self.worker_memory_mb}")
         need(self.retry_after_s >= 1, "retry_after_s", f"must be ≥ 1, got {self.retry_after_s}")
         if self.zenoh_config is not None:
             need(Path(self.zenoh_config).is_file(), "zenoh_config", f"{self.zenoh_config} is not a file")
