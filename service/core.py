@@ -177,6 +177,7 @@ class PlanningService:
                 self._in_flight -= 1
                 raise ServiceBusy(self._in_flight, self.settings.retry_after_s) from None
             outer: Future[Outcome] = Future()
+            outer.set_running_or_notify_cancel()  # only the service ends it (cancel(), shutdown, the job)
             self._jobs[outer] = inner
 
         def done(job: Future[Outcome]) -> None:
@@ -261,15 +262,10 @@ class PlanningService:
         """What a plan request may make a worker hold, bounded before a job is queued: the expansions
         (``options.max_iterations``, the search's node storage), the states of the result (start–goal
         distance / ``options.state_spacing_m``; the worker checks again with the map's size) and, for an
-        inline grid, how many search steps apart the poses are."""
+        inline grid, its extent (cells × resolution) and that start and goal are no farther apart than it."""
         if query.options.max_iterations > MAX_ITERATIONS:
             raise InvalidInput("options.max_iterations", f"must be ≤ {MAX_ITERATIONS} on this server")
         distance = math.dist(query.start[:2], query.goal[:2])
-        states = distance / query.options.state_spacing_m
-        if states > MAX_RESULT_STATES:
-            raise InvalidInput("options.state_spacing_m",
-                               f"{query.options.state_spacing_m:g} m would return more than {states:.3g} states; "
-                               f"this server returns at most {MAX_RESULT_STATES}")
         if isinstance(source, InlineGrid):
             rows, cols = len(source.data), len(source.data[0])
             extent = math.hypot(rows, cols) * source.resolution_m
@@ -280,6 +276,11 @@ class PlanningService:
             if cells > math.hypot(rows, cols) * 1.01:
                 raise InvalidInput("goal", f"start and goal are {distance:.3g} m apart, farther than the inline "
                                            f"grid ({extent:.3g} m across)")
+        states = distance / query.options.state_spacing_m
+        if states > MAX_RESULT_STATES:
+            raise InvalidInput("options.state_spacing_m",
+                               f"{query.options.state_spacing_m:g} m would return more than {states:.3g} states; "
+                               f"this server returns at most {MAX_RESULT_STATES}")
 
     def _map_source(self, map_spec: str | InlineGrid) -> Path | InlineGrid:
         """The file of a named map (checked now), or the inline grid (size checked now)."""

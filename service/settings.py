@@ -27,6 +27,7 @@ class ServiceSettings:
     (ignored when ``zenoh_config`` names a Zenoh config file). ``max_body_bytes`` bounds HTTP bodies and
     Zenoh payloads. ``worker_memory_mb`` is each worker process's address-space ceiling (0: none): a job
     that reaches it is answered as bad input instead of growing until the machine kills something.
+    ``http_token``, when set, is the bearer token every HTTP route but the health probes requires.
     """
 
     maps_dir: Path | None = None
@@ -37,6 +38,7 @@ class ServiceSettings:
     max_body_bytes: int = 4_000_000
     retry_after_s: int = 1
     worker_memory_mb: int = 2048
+    http_token: str | None = None
     warm_up: bool = True
     zenoh: bool = True
     zenoh_config: Path | None = None
