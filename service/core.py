@@ -33,7 +33,6 @@ from planner.robot import DEFAULT_ROBOT, builtin_robots, load_robot
 from planner.spherobot.request import ReconfigureRequest
 from service.grids import grid_png, load_map_file
 from service.jobs import (
-    MAX_RESULT_STATES,
     plan_job,
     reconfigure_job,
     simulate_job,
@@ -44,7 +43,7 @@ from service.jobs import (
     worker_init,
 )
 from service.outcome import Outcome, ServiceBusy, error_outcome, outcome_of_exception
-from service.pipeline import PlanQuery
+from service.pipeline import MAX_RESULT_STATES, PlanQuery
 from service.pool import START_TIMEOUT_S, SupervisedPool, WorkerDied
 from service.settings import ServiceSettings
 from service.wire import (

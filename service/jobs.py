@@ -8,7 +8,6 @@ A computation that meets an error is answered as the outcome table says (:mod:`s
 from __future__ import annotations
 
 import logging
-import math
 import os
 import time
 from collections.abc import Callable
@@ -98,30 +97,6 @@ def _job(name: str, compute: Callable[[], Any], plan_robot: Callable[[], Any] | 
         return outcome_of_exception(exc)
 
 
-#: most states a plan result may hold (~100 bytes of JSON each: a 20 MB reply)
-MAX_RESULT_STATES = 200_000
-#: a plan is assumed at most this many map diagonals (plus the start–goal distance) long when bounding its states
-MAX_DETOUR_DIAGONALS = 4
-
-
-def check_result_size(query: PlanQuery, grid: OccupancyGrid) -> None:
-    """Refuse, before planning, a plan whose result could hold more than ``MAX_RESULT_STATES`` states.
-
-    The result holds one state every ``options.state_spacing_m`` along the path; the path is taken to be at
-    most the start–goal distance plus ``MAX_DETOUR_DIAGONALS`` diagonals of the map long.
-    """
-    height, width = grid.data.shape
-    diagonal = math.hypot(width, height) * grid.resolution_m
-    distance = math.dist(query.start[:2], query.goal[:2])
-    spacing = query.options.state_spacing_m
-    states = (distance + MAX_DETOUR_DIAGONALS * diagonal) / spacing
-    if states > MAX_RESULT_STATES:
-        least = (distance + MAX_DETOUR_DIAGONALS * diagonal) / MAX_RESULT_STATES
-        raise InvalidInput("options.state_spacing_m", f"{spacing:g} m could return up to {states:.3g} states on "
-                                                      f"this map; this server returns at most {MAX_RESULT_STATES} "
-                                                      f"(use ≥ {least:.3g} m)")
-
-
 def plan_job(query: PlanQuery, robot_name: str | None, source: Path | InlineGrid) -> Outcome:
     """One plan, the pipeline of ``sphereplan plan``: load the robot and the grid, then
     :func:`service.pipeline.execute_plan`."""
@@ -130,7 +105,6 @@ def plan_job(query: PlanQuery, robot_name: str | None, source: Path | InlineGrid
         t0 = time.perf_counter()
         robot = load_robot(robot_name)
         grid = load_grid(source, robot_name)
-        check_result_size(query, grid)
         result = execute_plan(query, grid, robot, cancel=cancelled).to_json()
         # the time limit covers the whole job, result building included, not only the search
         limit = query.effective_time_limit_s

@@ -10,10 +10,10 @@ from typing import Any
 from planner.errors import InvalidInput, PlanningError
 from planner.hybrid_astar.plot import plot_plan
 from planner.hybrid_astar.search import PlannerOptions
-from planner.maps.load import load_any
 from planner.result import failure_json
 from planner.robot import load_robot
-from service.cli._io import emit_json, finite_float, positive_float
+from service.cli._io import check_output, emit_json, finite_float, plot_formats, positive_float, write_file
+from service.grids import read_map
 from service.outcome import EXIT_OK
 from service.pipeline import PlanQuery, execute_plan
 
@@ -42,6 +42,8 @@ def _query(args: argparse.Namespace) -> PlanQuery:
             options = json.loads(args.options)
         except json.JSONDecodeError as exc:
             raise InvalidInput("--options", f"is not valid JSON: {exc}") from None
+        except RecursionError:
+            raise InvalidInput("--options", "is nested too deeply") from None
         if not isinstance(options, dict):
             raise InvalidInput("--options", "must be a JSON object")
     if args.reverse:
@@ -53,18 +55,24 @@ def _query(args: argparse.Namespace) -> PlanQuery:
 def run(args: argparse.Namespace) -> int:
     robot = load_robot(args.robot)
     query = _query(args)  # before the map is read
+    check_output(args.out, "--out")
+    if args.plot:
+        check_output(args.plot, "--plot", plot_formats())
     if not Path(args.map).exists():
         raise InvalidInput("--map", f"{args.map} does not exist")
-    grid = load_any(args.map, robot)
+    grid = read_map(args.map, robot, "--map")
     try:
         result = execute_plan(query, grid, robot)
     except PlanningError as exc:  # the failed result is printed too; the exit code is the error's (service.outcome)
         emit_json(failure_json(exc.code, exc.msg, robot), args.out)
         if args.plot:
-            plot_plan(grid, robot, None, query.start, query.goal, args.plot, title=f"{grid.name}: no path ({exc.code})")
+            title = f"{grid.name}: no path ({exc.code})"
+            write_file(args.plot, "--plot",
+                       lambda: plot_plan(grid, robot, None, query.start, query.goal, args.plot, title=title))
         raise
     emit_json(result.to_json(), args.out)
     if args.plot:
-        plot_plan(grid, robot, result.states, query.start, query.goal, args.plot,
-                  title=f"{grid.name}: {robot.name}, {result.length_m:.2f} m in {result.planning_time_s * 1000:.0f} ms")
+        title = f"{grid.name}: {robot.name}, {result.length_m:.2f} m in {result.planning_time_s * 1000:.0f} ms"
+        write_file(args.plot, "--plot",
+                   lambda: plot_plan(grid, robot, result.states, query.start, query.goal, args.plot, title=title))
     return EXIT_OK
