@@ -57,10 +57,12 @@ def test_no_content_type_is_415_empty_body_is_400_trailing_slash_is_404(client: 
 
 def test_a_broken_map_file_does_not_leak_server_paths(client: httpx.Client, server: Server) -> None:
     broken = server.maps_dir / "broken.yaml"
-    broken.write_text("image: nowhere.pgm\nresolution: 0.1\norigin: [0, 0, 0]\n")
+    broken.write_text("image: nowhere.pgm\nresolution: 0.1\norigin: [0, 0, 0]\noccupied_thresh: 0.65\n"
+                      "free_thresh: 0.2\nnegate: 0\n")  # its image is missing: the error names the image file
     try:
         for response in (client.get("/v1/maps/broken"), client.post("/v1/plan", json={**plan_body(), "map": "broken"})):
             assert 400 <= response.status_code < 500, response.text
+            assert "nowhere.pgm" in response.text, response.text
             assert str(server.maps_dir) not in response.text and "/tmp" not in response.text, response.text
     finally:
         broken.unlink()
