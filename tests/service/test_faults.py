@@ -141,3 +141,24 @@ def test_shutdown_answers_jobs_in_flight_with_a_json_503(tmp_path: Path) -> None
         outcome = job.result(timeout=WAIT_S)
         assert outcome.answer.http_status == 503 and outcome.json()["error_msg"] == "the service is shutting down"
     assert svc.in_flight == 0 and not svc.ready
+
+
+def test_a_runaway_job_meets_the_memory_ceiling_not_the_oom_killer() -> None:
+    import numpy as np
+
+    from service.jobs import _job
+
+    pool = SupervisedPool(1, memory_limit_mb=1024)
+    try:
+        with pytest.raises(MemoryError):  # 8 GB asked for under a 1 GB address-space ceiling
+            pool.submit_job(np.ones, ((1 << 30,),)).result(timeout=WAIT_S)
+        assert pool.submit_job(os.getpid, ()).result(timeout=WAIT_S) in pool.worker_pids()  # the worker lives on
+    finally:
+        pool.shutdown()
+
+    def runaway() -> None:
+        raise MemoryError
+
+    outcome = _job("plan", runaway)
+    assert outcome.kind == "bad_input" and outcome.answer.http_status == 422
+    assert "more memory than this server allows" in outcome.json()["error_msg"]
