@@ -8,6 +8,8 @@ import pytest
 from planner.maps.catalogue import default_maps_dir
 from service.cli import main
 
+pytestmark = pytest.mark.faults
+
 GARAGE = str(default_maps_dir() / "garage.yaml")
 POSES = ["--start", "3.5", "8.05", "0", "--goal", "12", "8.05", "0"]
 

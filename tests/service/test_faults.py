@@ -26,6 +26,8 @@ from service.wire import PlanRequest
 from tests.service import service_harness as harness
 from tests.service.service_harness import plan_body
 
+pytestmark = pytest.mark.faults
+
 WAIT_S = 180.0
 
 

@@ -20,6 +20,8 @@ import pytest
 from tests.service import service_harness as harness
 from tests.service.service_harness import SLOT_GOAL, Server, plan_body
 
+pytestmark = pytest.mark.faults
+
 WAIT_S = 120.0
 
 

@@ -15,6 +15,8 @@ import pytest
 from tests.service import service_harness as harness
 from tests.service.service_harness import HALL_START, Server, plan_body
 
+pytestmark = pytest.mark.faults
+
 CLIENT = Path(__file__).with_name("zenoh_client.py")
 NESTED = "[" * 100_000
 

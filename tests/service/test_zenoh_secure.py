@@ -23,6 +23,8 @@ from service.zenoh_node import ZenohNode
 from tests.service import service_harness as harness
 from tests.service.service_harness import HALL_GOAL, HALL_START, plan_body
 
+pytestmark = pytest.mark.faults
+
 REPO = Path(__file__).resolve().parents[2]
 SHIPPED = REPO / "deploy" / "zenoh" / "service.json5"
 USERS = {"sphereplan": "service-password-1", "r1": "r1-password-0001", "operator": "operator-password-1",
