@@ -3,11 +3,13 @@
 Each capability is one ``submit_*`` method: it checks the request against this server (map and robot
 names, limits), builds the planner's own typed objects from it (a :class:`~service.pipeline.PlanQuery`,
 the Spherobot ``ReconfigureRequest``, ``SimulationOptions``, angles in radians) and queues one job of
-:mod:`service.jobs` in a process pool (planning is CPU-bound), returning a future
-:class:`~service.outcome.Outcome`. So a bad request is refused in the calling process before a job is
-queued. The pool is warmed at start-up so the first request does not pay for imports and compiled-code
-loading; each job carries its own deadline (the planner's time limit) and at most ``max_in_flight`` jobs
-are queued or running, beyond that a submit raises :class:`~service.outcome.ServiceBusy`. Map names are
+:mod:`service.jobs` in the supervised process pool (:mod:`service.pool`; planning is CPU-bound),
+returning a future :class:`~service.outcome.Outcome`. So a bad request is refused in the calling process
+before a job is queued. The pool is warmed at start-up so the first request does not pay for imports
+and compiled-code loading; each job carries its own deadline (a plan's time limit, covering the whole
+job) and at most ``max_in_flight`` jobs are queued or running, beyond that a submit raises
+:class:`~service.outcome.ServiceBusy`. A job's slot is freed when it ends or is cancelled
+(:meth:`PlanningService.cancel`: a client gone, a goal superseded, shutdown). Map names are
 looked up in a listing of the maps folder, never joined onto a path, so a request can only reach a map
 file that is in that folder.
 """
@@ -19,7 +21,7 @@ import math
 import threading
 import time
 from collections.abc import Callable
-from concurrent.futures import Executor, Future, ProcessPoolExecutor
+from concurrent.futures import Executor, Future
 from concurrent.futures import TimeoutError as FuturesTimeout
 from pathlib import Path
 from typing import Any
@@ -129,17 +131,8 @@ class PlanningService:
         """Stop the pool now: jobs in flight are answered "shutting down" and running workers ended."""
         self.begin_shutdown()
         executor, self._executor = self._executor, None
-        if executor is None:
-            return
-        processes = []
-        if isinstance(executor, ProcessPoolExecutor) and executor._processes:
-            processes = list(executor._processes.values())
-        executor.shutdown(wait=isinstance(executor, SupervisedPool), cancel_futures=True)
-        for proc in processes:
-            if proc.is_alive():
-                proc.terminate()
-        for proc in processes:
-            proc.join(timeout=5)
+        if executor is not None:
+            executor.shutdown(wait=isinstance(executor, SupervisedPool), cancel_futures=True)
 
     @property
     def ready(self) -> bool:
@@ -342,14 +335,17 @@ class PlanningService:
                             _radians(request.theta2, request.degrees), request.robot, request.verify)
 
     def plan(self, request: PlanRequest, timeout_s: float | None = None) -> Outcome:
-        """Blocking plan: the :class:`Outcome`, with request errors and busy mapped to outcomes too."""
+        """Blocking plan: the :class:`Outcome`, with request errors and busy mapped to outcomes too. A plan
+        not answered within ``timeout_s`` is cancelled (its slot freed) and answered busy."""
         try:
-            return self.submit_plan(request).result(timeout=timeout_s)
-        except FuturesTimeout:
-            return error_outcome(ServiceBusy, f"no answer within {timeout_s} s (the plan keeps its worker until its "
-                                 "own time limit ends)")
+            future = self.submit_plan(request)
         except (ServiceBusy, SpherePlanError) as exc:
             return outcome_of_exception(exc)
+        try:
+            return future.result(timeout=timeout_s)
+        except FuturesTimeout:
+            self.cancel(future)
+            return error_outcome(ServiceBusy, f"no answer within {timeout_s} s; the plan was cancelled")
 
     def maps(self) -> list[dict[str, Any]]:
         """Every map a request may name (:func:`planner.maps.catalogue.list_maps` entries: name, file, kind, size_m,

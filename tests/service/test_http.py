@@ -38,18 +38,6 @@ from tests.service.service_harness import (
 )
 
 
-@pytest.fixture(scope="session")
-def server() -> Iterator[Server]:
-    yield harness.acquire()
-    harness.release()
-
-
-@pytest.fixture()
-def client(server: Server) -> Iterator[httpx.Client]:
-    with httpx.Client(base_url=server.url, timeout=60) as c:
-        yield c
-
-
 def cli_plan(server: Server, tmp_path: Path, start: tuple[float, ...], goal: tuple[float, ...],
              *extra: str) -> tuple[int, dict[str, Any]]:
     out = tmp_path / "cli.json"

@@ -10,7 +10,6 @@ import signal
 import subprocess
 import sys
 import time
-from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
@@ -23,18 +22,6 @@ from tests.service.service_harness import SLOT_GOAL, Server, plan_body
 pytestmark = pytest.mark.faults
 
 WAIT_S = 120.0
-
-
-@pytest.fixture(scope="session")
-def server() -> Iterator[Server]:
-    yield harness.acquire()
-    harness.release()
-
-
-@pytest.fixture()
-def client(server: Server) -> Iterator[httpx.Client]:
-    with httpx.Client(base_url=server.url, timeout=60) as c:
-        yield c
 
 
 def poll_in_flight_zero(client: httpx.Client) -> None:

@@ -4,35 +4,14 @@ the queryables and topics, and a burst of goals for one robot (the newest wins).
 from __future__ import annotations
 
 import json
-import subprocess
-import sys
-from collections.abc import Iterator
-from pathlib import Path
-from typing import Any
 
 import pytest
 
-from tests.service import service_harness as harness
-from tests.service.service_harness import HALL_START, Server, plan_body
+from tests.service.service_harness import HALL_START, Server, plan_body, zenoh_steps
 
 pytestmark = pytest.mark.faults
 
-CLIENT = Path(__file__).with_name("zenoh_client.py")
 NESTED = "[" * 100_000
-
-
-@pytest.fixture(scope="session")
-def server() -> Iterator[Server]:
-    yield harness.acquire()
-    harness.release()
-
-
-def zenoh_steps(server: Server, steps: list[dict[str, Any]]) -> list[dict[str, Any]]:
-    done = subprocess.run([sys.executable, str(CLIENT), server.zenoh_endpoint], input=json.dumps(steps),
-                          capture_output=True, text=True, timeout=300, check=False)
-    assert done.returncode == 0, done.stderr
-    answers: list[dict[str, Any]] = json.loads(done.stdout)
-    return answers
 
 
 def test_oversized_and_nested_payloads_get_the_error_json(server: Server) -> None:
