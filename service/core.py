@@ -150,9 +150,9 @@ class PlanningService:
 
     def _submit(self, fn: Callable[..., Outcome], *args: Any, deadline_s: float | None = None) -> Future[Outcome]:
         """Queue ``fn(*args)`` in the pool, counting it against the in-flight cap until it ends or is
-        cancelled (:meth:`cancel`). ``deadline_s`` (default: the server's largest time limit) bounds the
-        job's whole run: the pool ends a job still running ``KILL_GRACE_S`` after it."""
-        deadline = self.settings.max_time_limit_s if deadline_s is None else deadline_s
+        cancelled (:meth:`cancel`). ``deadline_s`` (default: the server's ``max_job_s``) bounds the job's
+        whole run: the pool ends a job still running ``KILL_GRACE_S`` after it."""
+        deadline = self.settings.max_job_s if deadline_s is None else deadline_s
         with self._lock:
             if self._executor is None or self._closing:
                 raise ServiceBusy(self._in_flight, self.settings.retry_after_s)

@@ -309,11 +309,12 @@ async def get_robots(service: Service) -> list[dict[str, Any]]:
 def install_error_handlers(app: FastAPI) -> None:
     @app.exception_handler(RequestValidationError)
     async def invalid(request: Request, exc: RequestValidationError) -> JSONResponse:
+        errors = list(exc.errors())
         content_type = request.headers.get("content-type", "").split(";")[0].strip().lower()
-        if not (content_type == JSON or content_type.endswith("+json")):
+        about_body = any(tuple(e.get("loc", ()))[:1] == ("body",) for e in errors)
+        if about_body and not (content_type == JSON or content_type.endswith("+json")):
             got = repr(content_type) if content_type else "none"
             return _error(415, f"Content-Type must be {JSON}, got {got}", "content-type")
-        errors = list(exc.errors())
         error = invalid_input(errors)
         # an unparsable body, or none at all where a JSON object is required
         malformed = any(e.get("type") == "json_invalid" or (e.get("type") == "missing" and tuple(e.get("loc", ())) ==

@@ -9,7 +9,8 @@ and fails every job in it), each worker has its own pipe and its own supervising
   workers, so readiness can say "not ready" while the pool is short;
 * a job may carry a hard deadline (``submit_job(..., deadline_s=)``): a worker still busy with it
   ``KILL_GRACE_S`` after it is killed and replaced, and the job fails with
-  :class:`~planner.errors.PlannerTimedOut`;
+  :class:`~planner.errors.PlannerTimedOut` (an answer that comes within the grace stands: the plan job
+  checks its own deadline and answers the timeout itself);
 * :meth:`SupervisedPool.cancel` ends a job: a queued one is dropped, a running one is asked to stop
   through a shared flag (the planner polls it between search chunks, see :func:`service.jobs.cancelled`)
   and its worker is killed and replaced if it has not stopped ``KILL_GRACE_S`` later;
@@ -186,7 +187,7 @@ class _Worker:
                 stop_at, reason = time.monotonic() + KILL_GRACE_S, PlannerCancelled("the job was cancelled")
             if (task.deadline_s is not None and stop_at is None
                     and time.monotonic() > task.started + task.deadline_s):
-                self.cancel_flag.value = 1
+                # no cancel flag here: the job's own deadline check answers a timeout if it can, in the grace
                 stop_at = time.monotonic() + KILL_GRACE_S
                 reason = PlannerTimedOut(f"the job did not finish within its time limit of {task.deadline_s:g} s")
             if self.pool._closed:
