@@ -14,6 +14,9 @@ and fails every job in it), each worker has its own pipe and its own supervising
 * :meth:`SupervisedPool.cancel` ends a job: a queued one is dropped, a running one is asked to stop
   through a shared flag (the planner polls it between search chunks, see :func:`service.jobs.cancelled`)
   and its worker is killed and replaced if it has not stopped ``KILL_GRACE_S`` later;
+* queued jobs start earliest deadline first (queued time + time limit), so a short plan waits for at
+  most the plans already running, never behind queued long ones, and a long plan still starts once its
+  own deadline is the earliest;
 * each worker may get an address-space ceiling (``memory_limit_mb``) so that a runaway ends in a
   ``MemoryError`` the job answers cleanly instead of the machine's OOM killer.
 """
@@ -56,6 +59,13 @@ class _Task:
     deadline_s: float | None = None  # seconds of running time, counted from when a worker takes it
     cancel_requested: bool = False
     started: float | None = field(default=None)
+    queued_at: float = field(default_factory=time.monotonic)
+
+    @property
+    def due(self) -> float:
+        """When the job would have to be done if it started now-ish: queued time + its deadline (the
+        earliest-deadline-first order of the queue; jobs without a deadline go last, oldest first)."""
+        return self.queued_at + (self.deadline_s if self.deadline_s is not None else 1e9)
 
 
 def _worker_main(conn: Connection, cancel_flag: Any, initializer: Callable[[], None] | None,
@@ -307,7 +317,8 @@ class SupervisedPool(Executor):
             if not self._queue:
                 self._cv.wait(timeout=POLL_S * 5)
             while self._queue:
-                task = self._queue.popleft()
+                task = min(self._queue, key=lambda t: t.due)  # earliest deadline first (the queue is short)
+                self._queue.remove(task)
                 if task.future.set_running_or_notify_cancel():
                     worker.task = task
                     return task

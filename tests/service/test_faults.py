@@ -164,3 +164,23 @@ def test_a_runaway_job_meets_the_memory_ceiling_not_the_oom_killer() -> None:
     outcome = _job("plan", runaway)
     assert outcome.kind == "bad_input" and outcome.answer.http_status == 422
     assert "more memory than this server allows" in outcome.json()["error_msg"]
+
+
+def test_a_short_plan_does_not_wait_behind_queued_long_ones(tmp_path: Path) -> None:
+    svc = PlanningService(ServiceSettings(maps_dir=harness.make_maps(tmp_path / "maps"), workers=1, zenoh=False,
+                                          warm_up=False, max_time_limit_s=20.0))
+    svc.start()
+    try:
+        pool = pool_of(svc)
+        poll(lambda: svc.ready, what="the worker")
+        longs = [slot_plan(svc, 6.0)]
+        poll(lambda: pool.busy_pids(), what="the first long plan to start")
+        longs += [slot_plan(svc, 6.0), slot_plan(svc, 6.0)]
+        short = svc.submit_plan(PlanRequest.model_validate(plan_body()))
+        assert short.result(timeout=WAIT_S).ok
+        # it ran right after the long plan that was running when it came, ahead of the two queued before it
+        assert longs[0].done() and not longs[1].done() and not longs[2].done()
+        for job in longs[1:]:
+            svc.cancel(job)
+    finally:
+        svc.close()
