@@ -65,6 +65,9 @@ log = logging.getLogger(__name__)
 MAX_RECONFIGURE_RADII = 200
 #: most search expansions a plan may ask for (options.max_iterations): ~64 bytes of node storage each
 MAX_ITERATIONS = 4_000_000
+#: added to a plan's time limit for the pool's hard deadline: loading the map (a mesh's first load) is not
+#: part of the time limit, the search, smoothing and result building are (the job checks those itself)
+MAP_LOAD_ALLOWANCE_S = 10.0
 #: widest inline grid a plan may use (m, diagonal): cells × resolution, so a few cells cannot span a continent
 MAX_INLINE_EXTENT_M = 2_000.0
 
@@ -248,7 +251,8 @@ class PlanningService:
             raise InvalidInput("options.time_limit_s", f"must be ≤ {limit:g} s on this server")
         source = self._map_source(request.map)
         self._check_plan_size(query, source)
-        return self._submit(plan_job, query, request.robot, source, deadline_s=query.effective_time_limit_s)
+        return self._submit(plan_job, query, request.robot, source,
+                            deadline_s=query.effective_time_limit_s + MAP_LOAD_ALLOWANCE_S)
 
     def _check_plan_size(self, query: PlanQuery, source: Path | InlineGrid) -> None:
         """What a plan request may make a worker hold, bounded before a job is queued: the expansions

