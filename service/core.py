@@ -3,11 +3,13 @@
 Each capability is one ``submit_*`` method: it checks the request against this server (map and robot
 names, limits), builds the planner's own typed objects from it (a :class:`~service.pipeline.PlanQuery`,
 the Spherobot ``ReconfigureRequest``, ``SimulationOptions``, angles in radians) and queues one job of
-:mod:`service.jobs` in a process pool (planning is CPU-bound), returning a future
-:class:`~service.outcome.Outcome`. So a bad request is refused in the calling process before a job is
-queued. The pool is warmed at start-up so the first request does not pay for imports and compiled-code
-loading; each job carries its own deadline (the planner's time limit) and at most ``max_in_flight`` jobs
-are queued or running, beyond that a submit raises :class:`~service.outcome.ServiceBusy`. Map names are
+:mod:`service.jobs` in the supervised process pool (:mod:`service.pool`; planning is CPU-bound),
+returning a future :class:`~service.outcome.Outcome`. So a bad request is refused in the calling process
+before a job is queued. The pool is warmed at start-up so the first request does not pay for imports
+and compiled-code loading; each job carries its own deadline (a plan's time limit, covering the whole
+job) and at most ``max_in_flight`` jobs are queued or running, beyond that a submit raises
+:class:`~service.outcome.ServiceBusy`. A job's slot is freed when it ends or is cancelled
+(:meth:`PlanningService.cancel`: a client gone, a goal superseded, shutdown). Map names are
 looked up in a listing of the maps folder, never joined onto a path, so a request can only reach a map
 file that is in that folder.
 """
@@ -16,17 +18,15 @@ from __future__ import annotations
 
 import logging
 import math
-import multiprocessing
 import threading
 import time
 from collections.abc import Callable
-from concurrent.futures import Executor, Future, ProcessPoolExecutor
+from concurrent.futures import Executor, Future
 from concurrent.futures import TimeoutError as FuturesTimeout
-from concurrent.futures.process import BrokenProcessPool
 from pathlib import Path
 from typing import Any
 
-from planner.errors import InvalidInput, NotFound, SpherePlanError
+from planner.errors import InvalidInput, NotFound, PlannerCancelled, SpherePlanError
 from planner.hybrid_astar.search import PlannerOptions
 from planner.maps.catalogue import default_maps_dir, list_maps, map_files
 from planner.maps.nav2 import MESH_SUFFIXES
@@ -45,7 +45,8 @@ from service.jobs import (
     worker_init,
 )
 from service.outcome import Outcome, ServiceBusy, error_outcome, outcome_of_exception
-from service.pipeline import PlanQuery
+from service.pipeline import MAX_RESULT_STATES, PlanQuery
+from service.pool import START_TIMEOUT_S, SupervisedPool, WorkerDied
 from service.settings import ServiceSettings
 from service.wire import (
     InlineGrid,
@@ -63,6 +64,13 @@ log = logging.getLogger(__name__)
 
 #: farthest reconfiguration goal, in sphere radii from the start (paper 004's examples are a few radii)
 MAX_RECONFIGURE_RADII = 200
+#: most search expansions a plan may ask for (options.max_iterations): ~64 bytes of node storage each
+MAX_ITERATIONS = 4_000_000
+#: added to a plan's time limit for the pool's hard deadline: loading the map (a mesh's first load) is not
+#: part of the time limit, the search, smoothing and result building are (the job checks those itself)
+MAP_LOAD_ALLOWANCE_S = 10.0
+#: widest inline grid a plan may use (m, diagonal): cells × resolution, so a few cells cannot span a continent
+MAX_INLINE_EXTENT_M = 2_000.0
 
 
 def _radians(angle: float, degrees: bool) -> float:
@@ -86,47 +94,57 @@ class PlanningService:
         self._lock = threading.Lock()
         self._in_flight = 0
         self._ready = False
+        self._closing = False
+        self._jobs: dict[Future[Outcome], Future[Outcome]] = {}  # the service's future → the pool's
         self.started_at = time.time()
         self.warm_up_s = 0.0
 
     # ---------------------------------------------------------------- life cycle
 
-    @staticmethod
-    def _process_pool(workers: int) -> Executor:
-        # spawn, not fork: the parent runs threads (Zenoh, the event loop) that fork would copy mid-flight
-        return ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("spawn"),
-                                   initializer=worker_init)
+    def _process_pool(self, workers: int) -> Executor:
+        # spawned, supervised processes: a dead worker is replaced and fails only the job it was running
+        return SupervisedPool(workers, initializer=worker_init, warm_up=warm_up_job if self.settings.warm_up else None,
+                              memory_limit_mb=self.settings.worker_memory_mb)
 
     def start(self) -> None:
-        """Open the pool and, if ``settings.warm_up``, run one warm-up job per worker (blocking)."""
+        """Open the pool and, if ``settings.warm_up``, wait until every worker is warmed (blocking)."""
         t0 = time.perf_counter()
         self._executor = self._executor_factory(self.settings.workers)
-        if self.settings.warm_up:
+        if isinstance(self._executor, SupervisedPool):
+            self._executor.wait_ready(START_TIMEOUT_S)
+            log.info("warmed %d worker process(es) %s", self._executor.ready_workers, self._executor.worker_pids())
+        elif self.settings.warm_up:
             jobs = [self._executor.submit(warm_up_job) for _ in range(self.settings.workers)]
             pids = {job.result() for job in jobs}
             log.info("warmed %d worker process(es) %s", len(pids), sorted(pids))
         self.warm_up_s = time.perf_counter() - t0
         self._ready = True
 
+    def begin_shutdown(self) -> None:
+        """Refuse new jobs and answer every job in flight now with the JSON 503 "shutting down" (the HTTP
+        server calls this on SIGTERM/Ctrl-C, before it stops waiting for open requests)."""
+        with self._lock:
+            self._ready = False
+            self._closing = True
+            pending = list(self._jobs.items())
+        for outer, inner in pending:
+            self._cancel_inner(inner)
+            self._resolve(outer, error_outcome(ServiceBusy, "the service is shutting down"))
+
     def close(self) -> None:
-        """Stop the pool now: queued jobs are cancelled and running workers terminated."""
-        self._ready = False
+        """Stop the pool now: jobs in flight are answered "shutting down" and running workers ended."""
+        self.begin_shutdown()
         executor, self._executor = self._executor, None
-        if executor is None:
-            return
-        processes = []
-        if isinstance(executor, ProcessPoolExecutor) and executor._processes:
-            processes = list(executor._processes.values())
-        executor.shutdown(wait=False, cancel_futures=True)
-        for proc in processes:
-            if proc.is_alive():
-                proc.terminate()
-        for proc in processes:
-            proc.join(timeout=5)
+        if executor is not None:
+            executor.shutdown(wait=isinstance(executor, SupervisedPool), cancel_futures=True)
 
     @property
     def ready(self) -> bool:
-        return self._ready and self._executor is not None
+        """Started, not stopping, and (with the supervised pool) no worker missing."""
+        executor = self._executor
+        if not self._ready or executor is None:
+            return False
+        return not isinstance(executor, SupervisedPool) or executor.ready_workers == executor.size
 
     @property
     def in_flight(self) -> int:
@@ -134,52 +152,73 @@ class PlanningService:
 
     # ---------------------------------------------------------------- job submission
 
-    def _submit(self, fn: Callable[..., Outcome], *args: Any) -> Future[Outcome]:
-        """Queue ``fn(*args)`` in the pool, counting it against the in-flight cap."""
+    def _submit(self, fn: Callable[..., Outcome], *args: Any, deadline_s: float | None = None) -> Future[Outcome]:
+        """Queue ``fn(*args)`` in the pool, counting it against the in-flight cap until it ends or is
+        cancelled (:meth:`cancel`). ``deadline_s`` (default: the server's ``max_job_s``) bounds the job's
+        whole run: the pool ends a job still running ``KILL_GRACE_S`` after it."""
+        deadline = self.settings.max_job_s if deadline_s is None else deadline_s
         with self._lock:
-            if self._executor is None:
+            if self._executor is None or self._closing:
                 raise ServiceBusy(self._in_flight, self.settings.retry_after_s)
             if self._in_flight >= self.settings.in_flight_cap:
                 raise ServiceBusy(self._in_flight, self.settings.retry_after_s)
             self._in_flight += 1
             executor = self._executor
             try:
-                inner = executor.submit(fn, *args)
+                if isinstance(executor, SupervisedPool):
+                    inner = executor.submit_job(fn, args, deadline_s=deadline)
+                else:
+                    inner = executor.submit(fn, *args)
             except RuntimeError:  # shut down meanwhile
                 self._in_flight -= 1
                 raise ServiceBusy(self._in_flight, self.settings.retry_after_s) from None
-        outer: Future[Outcome] = Future()
+            outer: Future[Outcome] = Future()
+            outer.set_running_or_notify_cancel()  # only the service ends it (cancel(), shutdown, the job)
+            self._jobs[outer] = inner
 
         def done(job: Future[Outcome]) -> None:
-            with self._lock:
-                self._in_flight -= 1
             if job.cancelled():
-                outer.set_result(error_outcome(ServiceBusy, "the service is shutting down"))
-                return
-            exc = job.exception()
-            if exc is None:
-                outer.set_result(job.result())
-            elif isinstance(exc, BrokenProcessPool):
-                log.error("a worker process died: %s; restarting the pool", exc)
-                self._restart_pool(executor)
-                outer.set_result(error_outcome(BrokenProcessPool, "a worker process died while planning"))
+                outcome = error_outcome(ServiceBusy, "the service is shutting down")
+            elif (exc := job.exception()) is None:
+                outcome = job.result()
+            elif isinstance(exc, WorkerDied):
+                log.error("job %s failed: %s", getattr(fn, "__name__", fn), exc)
+                outcome = error_outcome(WorkerDied, "a worker process died while running this job")
+            elif isinstance(exc, RuntimeError) and self._closing:
+                outcome = error_outcome(ServiceBusy, "the service is shutting down")
             else:
-                outer.set_result(outcome_of_exception(exc))
+                outcome = outcome_of_exception(exc)
+            self._resolve(outer, outcome)
 
         inner.add_done_callback(done)
         return outer
 
-    def _restart_pool(self, broken: Any) -> None:
-        """Replace the pool ``broken`` once (every job it failed calls this) and warm the new one."""
+    def _resolve(self, outer: Future[Outcome], outcome: Outcome) -> None:
+        """Answer ``outer`` once and free its slot (whichever of the job, a cancel or shutdown comes first)."""
         with self._lock:
-            if self._executor is None or not self._ready or self._executor is not broken:
+            if self._jobs.pop(outer, None) is None:
                 return
-            self._executor = self._executor_factory(self.settings.workers)
-            fresh = self._executor
-        broken.shutdown(wait=False, cancel_futures=True)
-        if self.settings.warm_up:
-            for _ in range(self.settings.workers):
-                fresh.submit(warm_up_job)
+            self._in_flight -= 1
+        outer.set_result(outcome)
+
+    def _cancel_inner(self, inner: Future[Outcome]) -> None:
+        executor = self._executor
+        if isinstance(executor, SupervisedPool):
+            executor.cancel(inner)
+        else:
+            inner.cancel()
+
+    def cancel(self, future: Future[Outcome]) -> bool:
+        """Cancel a job this service queued (a client gave up, a newer goal replaced it): it is answered
+        "cancelled" and its slot is freed now; the pool stops the job (queued: never runs; running: stopped
+        between search chunks, or its worker replaced). False if it had already ended."""
+        with self._lock:
+            inner = self._jobs.get(future)
+        if inner is None:
+            return False
+        self._cancel_inner(inner)
+        self._resolve(future, outcome_of_exception(PlannerCancelled("the job was cancelled")))
+        return True
 
     # ---------------------------------------------------------------- capabilities
 
@@ -211,7 +250,34 @@ class PlanningService:
             raise InvalidInput("time_limit_s", f"must be ≤ {limit:g} s on this server")
         if "time_limit_s" in options and query.options.time_limit_s > limit:
             raise InvalidInput("options.time_limit_s", f"must be ≤ {limit:g} s on this server")
-        return self._submit(plan_job, query, request.robot, self._map_source(request.map))
+        source = self._map_source(request.map)
+        self._check_plan_size(query, source)
+        return self._submit(plan_job, query, request.robot, source,
+                            deadline_s=query.effective_time_limit_s + MAP_LOAD_ALLOWANCE_S)
+
+    def _check_plan_size(self, query: PlanQuery, source: Path | InlineGrid) -> None:
+        """What a plan request may make a worker hold, bounded before a job is queued: the expansions
+        (``options.max_iterations``, the search's node storage), the states of the result (start–goal
+        distance / ``options.state_spacing_m``; the worker checks again with the map's size) and, for an
+        inline grid, its extent (cells × resolution) and that start and goal are no farther apart than it."""
+        if query.options.max_iterations > MAX_ITERATIONS:
+            raise InvalidInput("options.max_iterations", f"must be ≤ {MAX_ITERATIONS} on this server")
+        distance = math.dist(query.start[:2], query.goal[:2])
+        if isinstance(source, InlineGrid):
+            rows, cols = len(source.data), len(source.data[0])
+            extent = math.hypot(rows, cols) * source.resolution_m
+            cells = distance / source.resolution_m
+            if extent > MAX_INLINE_EXTENT_M:
+                raise InvalidInput("map.resolution_m", f"the grid spans {extent:.3g} m; this server plans on "
+                                                       f"inline grids at most {MAX_INLINE_EXTENT_M:g} m across")
+            if cells > math.hypot(rows, cols) * 1.01:
+                raise InvalidInput("goal", f"start and goal are {distance:.3g} m apart, farther than the inline "
+                                           f"grid ({extent:.3g} m across)")
+        states = distance / query.options.state_spacing_m
+        if states > MAX_RESULT_STATES:
+            raise InvalidInput("options.state_spacing_m",
+                               f"{query.options.state_spacing_m:g} m would return more than {states:.3g} states; "
+                               f"this server returns at most {MAX_RESULT_STATES}")
 
     def _map_source(self, map_spec: str | InlineGrid | RosOccupancyGrid) -> Path | InlineGrid:
         """The file of a named map (checked now), or the inline grid (size checked now); a
@@ -277,14 +343,17 @@ class PlanningService:
                             _radians(request.theta2, request.degrees), request.robot, request.verify)
 
     def plan(self, request: PlanRequest, timeout_s: float | None = None) -> Outcome:
-        """Blocking plan: the :class:`Outcome`, with request errors and busy mapped to outcomes too."""
+        """Blocking plan: the :class:`Outcome`, with request errors and busy mapped to outcomes too. A plan
+        not answered within ``timeout_s`` is cancelled (its slot freed) and answered busy."""
         try:
-            return self.submit_plan(request).result(timeout=timeout_s)
-        except FuturesTimeout:
-            return error_outcome(ServiceBusy, f"no answer within {timeout_s} s (the plan keeps its worker until its "
-                                 "own time limit ends)")
+            future = self.submit_plan(request)
         except (ServiceBusy, SpherePlanError) as exc:
             return outcome_of_exception(exc)
+        try:
+            return future.result(timeout=timeout_s)
+        except FuturesTimeout:
+            self.cancel(future)
+            return error_outcome(ServiceBusy, f"no answer within {timeout_s} s; the plan was cancelled")
 
     def maps(self) -> list[dict[str, Any]]:
         """Every map a request may name (:func:`planner.maps.catalogue.list_maps` entries: name, file, kind, size_m,
@@ -312,6 +381,10 @@ class PlanningService:
         return [load_robot(name).to_json() for name in builtin_robots()]
 
     def health(self) -> dict[str, Any]:
-        return {"status": "ok" if self.ready else "starting", "workers": self.settings.workers,
+        executor = self._executor
+        workers_ready = executor.ready_workers if isinstance(executor, SupervisedPool) else self.settings.workers
+        status = ("ok" if self.ready else "stopping" if self._closing else
+                  "starting" if not self._ready else "degraded")
+        return {"status": status, "workers_ready": workers_ready, "workers": self.settings.workers,
                 "in_flight": self._in_flight, "max_in_flight": self.settings.in_flight_cap,
                 "warm_up_s": round(self.warm_up_s, 3), "uptime_s": round(time.time() - self.started_at, 3)}

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import hashlib
 import io
+import re
 import threading
 from collections import OrderedDict
 from collections.abc import Callable
@@ -17,9 +18,10 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from planner.errors import InvalidInput, MapError, SpherePlanError
 from planner.maps.nav2 import MESH_SUFFIXES
 from planner.occupancy import OccupancyGrid
-from planner.robot import load_robot
+from planner.robot import RobotProfile, load_robot
 
 if TYPE_CHECKING:
     from service.wire import InlineGrid
@@ -43,14 +45,45 @@ def _cached(key: tuple[Any, ...], make: Callable[[], OccupancyGrid]) -> Occupanc
     return grid
 
 
-def load_map_file(path: Path, robot_name: str | None) -> OccupancyGrid:
-    """A map file as a grid, cached per (file, modification time[, robot for meshes])."""
+_ABSOLUTE_PATH = re.compile(r"/[^\s'\"]+")
+
+
+def read_map(path: Path | str, robot: RobotProfile | None, field: str = "map",
+             hide_paths: bool = False) -> OccupancyGrid:
+    """:func:`planner.maps.load.load_any`, with every way a map file can fail to load (a bad image, an
+    image too large to decode, an unreadable file) raised as a :class:`MapError` naming ``field``; with
+    ``hide_paths`` (the service: the client named the map, not its file) absolute paths in the message are
+    cut down to file names."""
+    from PIL import Image
+
     from planner.maps.load import load_any
 
+    try:
+        return load_any(path, robot)
+    except SpherePlanError as exc:
+        if not hide_paths:
+            raise
+        error: SpherePlanError = exc
+    except (Image.DecompressionBombError, OSError, ValueError, MemoryError) as exc:
+        error = MapError(field, f"map file {Path(path).name} cannot be loaded: {type(exc).__name__}: {exc}")
+    if not hide_paths:
+        raise error
+
+    def hide(text: str) -> str:
+        return _ABSOLUTE_PATH.sub(lambda m: Path(m.group()).name, text)
+
+    if isinstance(error, InvalidInput):
+        raise type(error)(error.field, hide(error.msg)) from None
+    raise MapError(field, hide(str(error))) from None
+
+
+def load_map_file(path: Path, robot_name: str | None) -> OccupancyGrid:
+    """A map file of the maps folder as a grid, cached per (file, modification time[, robot for meshes]);
+    errors never show the server's paths."""
     stat = path.stat()
     mesh = path.suffix.lower() in MESH_SUFFIXES
     key = ("file", str(path), stat.st_mtime_ns, stat.st_size, robot_name if mesh else None)
-    return _cached(key, lambda: load_any(path, load_robot(robot_name) if mesh else None))
+    return _cached(key, lambda: read_map(path, load_robot(robot_name) if mesh else None, hide_paths=True))
 
 
 def inline_grid(spec: InlineGrid) -> OccupancyGrid:

@@ -8,14 +8,15 @@ service is answered as the outcome table says (:mod:`service.outcome`); the HTTP
 (200 = not a planning failure):
 
 =====  ==================================================================================
-400    malformed JSON, unreadable body
+400    malformed JSON, unreadable or empty body
+401    no or wrong bearer token (when the server has ``--token-file``)
 404    unknown map or robot, unknown route
 413    body larger than ``settings.max_body_bytes``
-415    a body that is not ``application/json``
+415    a body that is not ``application/json`` (or no ``Content-Type``)
 422    wrong types, unknown fields, NaN/inf, negative or too long time limits, bad options;
        a plan that failed (start/goal outside or occupied 203–206, timeout 207, no path 208):
        the body is then the failed-result JSON (``status: failed``) the CLI prints
-503    the pool is full (``Retry-After`` header) or the service is not ready
+503    the pool is full (``Retry-After`` header), the service is not ready, or it is shutting down
 =====  ==================================================================================
 
 Nothing a client sends produces a 5xx; a 500 means a bug and is logged with its traceback.
@@ -24,6 +25,7 @@ Nothing a client sends produces a 5xx; a 500 means a bug and is logged with its 
 from __future__ import annotations
 
 import asyncio
+import hmac
 import logging
 from collections.abc import AsyncIterator, Callable
 from concurrent.futures import Future
@@ -75,11 +77,32 @@ def outcome_response(outcome: Outcome, retry_after_s: int = 1) -> Response:
     return Response(outcome.body, outcome.answer.http_status, headers, media_type=JSON)
 
 
-async def answer(service: PlanningService, submit: Callable[[M], Future[Outcome]], body: M) -> Response:
+#: how often a route waiting for its job checks whether the client is still there (s)
+DISCONNECT_POLL_S = 0.2
+
+
+async def answer(request: Request, service: PlanningService, submit: Callable[[M], Future[Outcome]],
+                 body: M) -> Response:
     """What every job route does: queue ``body`` with ``submit`` (off the event loop: it checks the request
-    and may list the maps folder), wait for the job without blocking the loop, answer its outcome."""
+    and may list the maps folder), wait for the job without blocking the loop, answer its outcome.
+
+    A client that disconnects while waiting cancels its job (its slot is freed at once); so does the
+    server cancelling the request task."""
     future = await asyncio.to_thread(submit, body)
-    return outcome_response(await asyncio.wrap_future(future), service.settings.retry_after_s)
+    waiter = asyncio.shield(asyncio.wrap_future(future))
+    try:
+        while True:
+            done, _ = await asyncio.wait({waiter}, timeout=DISCONNECT_POLL_S)
+            if done:
+                break
+            if await request.is_disconnected():
+                log.info("client gone: cancelling its %s job", request.url.path)
+                service.cancel(future)
+                break
+    except asyncio.CancelledError:
+        service.cancel(future)
+        raise
+    return outcome_response(await waiter, service.settings.retry_after_s)
 
 
 class BodyLimit:
@@ -129,6 +152,27 @@ class BodyLimit:
         await _error(413, f"request body larger than {self.limit} bytes", "body")(scope, receive, send)
 
 
+class BearerToken:
+    """ASGI middleware: every route but the health probes needs ``Authorization: Bearer <token>`` (401)."""
+
+    OPEN = frozenset({"/healthz", "/readyz"})
+
+    def __init__(self, app: ASGIApp, token: str) -> None:
+        self.app = app
+        self.expected = f"Bearer {token}".encode()
+
+    async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
+        if scope["type"] != "http" or scope.get("path") in self.OPEN:
+            await self.app(scope, receive, send)
+            return
+        given = dict(scope.get("headers") or []).get(b"authorization", b"")
+        if not hmac.compare_digest(given, self.expected):
+            await _error(401, "a valid 'Authorization: Bearer <token>' header is required", "authorization",
+                         {"WWW-Authenticate": "Bearer"})(scope, receive, send)
+            return
+        await self.app(scope, receive, send)
+
+
 class _TooLarge(StarletteHTTPException):
     def __init__(self, limit: int) -> None:
         super().__init__(413, f"request body larger than {limit} bytes")
@@ -146,7 +190,8 @@ Service = Annotated[PlanningService, Depends(get_service)]
 MapName = Annotated[str, PathParam(pattern=NAME_PATTERN, description="a map in the maps folder")]
 ERRORS: dict[int | str, dict[str, Any]] = {
     code: {"model": ErrorBody, "description": text} for code, text in
-    ((400, "malformed request"), (404, "unknown map or robot"), (413, "body too large"),
+    ((400, "malformed request"), (401, "bearer token missing or wrong (servers with --token-file)"),
+     (404, "unknown map or robot"), (413, "body too large"),
      (415, "body is not JSON"),
      (422, "invalid request or failed plan"), (503, "busy: retry after Retry-After seconds"))
 }
@@ -172,60 +217,60 @@ plan = APIRouter(prefix="/v1", tags=["plan"])
 
 
 @plan.post("/plan", response_model=PlanResultOut, responses=ERRORS)
-async def post_plan(body: PlanRequest, service: Service) -> Response:
+async def post_plan(request: Request, body: PlanRequest, service: Service) -> Response:
     """Plan a rollable path from ``start`` to ``goal`` on a named map (or an inline grid, at most
     ``max_inline_cells`` cells). Answers the plan result JSON — the same object ``sphereplan plan``
     prints. A failed plan answers 422 with the failed-result JSON and its Nav2 code."""
-    return await answer(service, service.submit_plan, body)
+    return await answer(request, service, service.submit_plan, body)
 
 
 simulate = APIRouter(prefix="/v1", tags=["simulate"])
 
 
 @simulate.post("/simulate", responses=ERRORS)
-async def post_simulate(body: SimulateRequest, service: Service) -> Response:
+async def post_simulate(request: Request, body: SimulateRequest, service: Service) -> Response:
     """Roll a plan (the result of ``/v1/plan``) in closed loop on a map: simulator, odometry/GNSS fusion
     and the MPC tracker of paper 001. Answers the SIM.json object ``sphereplan simulate`` writes
     (``trajectory``, ``estimate``, ``odometry``, ``gnss``, ``commands``, ``metrics``)."""
-    return await answer(service, service.submit_simulate, body)
+    return await answer(request, service, service.submit_simulate, body)
 
 
 reconfigure = APIRouter(prefix="/v1", tags=["reconfigure"])
 
 
 @reconfigure.post("/reconfigure", responses=ERRORS)
-async def post_reconfigure(body: ReconfigureIn, service: Service) -> Response:
+async def post_reconfigure(request: Request, body: ReconfigureIn, service: Service) -> Response:
     """Spherobot reconfiguration (paper 004): reach ``goal`` with the camera point P on top (and, with
     ``goal_heading``, a heading), proved by rolling the sphere through SO(3). What ``sphereplan
     reconfigure`` prints; with ``map`` the swept sphere is checked against it (failures 203–206, 208)."""
-    return await answer(service, service.submit_reconfigure, body)
+    return await answer(request, service, service.submit_reconfigure, body)
 
 
 vpip = APIRouter(prefix="/v1/vpip", tags=["vpip"])
 
 
 @vpip.post("/rods", responses=ERRORS)
-async def post_vpip_rods(body: VpipRodsRequest, service: Service) -> Response:
+async def post_vpip_rods(request: Request, body: VpipRodsRequest, service: Service) -> Response:
     """Eq. 18 length of every rod of a rod-driven sphere (paper 000) for one VPIP plane, roll and pitch
     phase: what ``sphereplan vpip rods`` prints."""
-    return await answer(service, service.submit_vpip_rods, body)
+    return await answer(request, service, service.submit_vpip_rods, body)
 
 
 @vpip.post("/schedule", responses=ERRORS)
-async def post_vpip_schedule(body: VpipScheduleRequest, service: Service) -> Response:
+async def post_vpip_schedule(request: Request, body: VpipScheduleRequest, service: Service) -> Response:
     """The 100 Hz VPIP cascade along a plan: plane angles and rod lengths per tick, the series
     ``sphereplan vpip schedule --out`` writes."""
-    return await answer(service, service.submit_vpip_schedule, body)
+    return await answer(request, service, service.submit_vpip_schedule, body)
 
 
 tensegrity = APIRouter(prefix="/v1/tensegrity", tags=["tensegrity"])
 
 
 @tensegrity.post("/static", responses=ERRORS)
-async def post_tensegrity_static(body: TensegrityStaticRequest, service: Service) -> Response:
+async def post_tensegrity_static(request: Request, body: TensegrityStaticRequest, service: Service) -> Response:
     """The four hybrid static states of the TeXploR two-arc robot (paper 002) for slider angles θ1, θ2:
     what ``sphereplan tensegrity static`` prints."""
-    return await answer(service, service.submit_tensegrity_static, body)
+    return await answer(request, service, service.submit_tensegrity_static, body)
 
 
 maps = APIRouter(prefix="/v1", tags=["maps"])
@@ -290,12 +335,16 @@ async def get_viewer_file(name: str) -> Response:
 def install_error_handlers(app: FastAPI) -> None:
     @app.exception_handler(RequestValidationError)
     async def invalid(request: Request, exc: RequestValidationError) -> JSONResponse:
-        content_type = request.headers.get("content-type", "application/json").split(";")[0].strip().lower()
-        if not (content_type == JSON or content_type.endswith("+json")):
-            return _error(415, f"Content-Type must be {JSON}, got {content_type!r}", "content-type")
         errors = list(exc.errors())
+        content_type = request.headers.get("content-type", "").split(";")[0].strip().lower()
+        about_body = any(tuple(e.get("loc", ()))[:1] == ("body",) for e in errors)
+        if about_body and not (content_type == JSON or content_type.endswith("+json")):
+            got = repr(content_type) if content_type else "none"
+            return _error(415, f"Content-Type must be {JSON}, got {got}", "content-type")
         error = invalid_input(errors)
-        malformed = any(e.get("type") == "json_invalid" for e in errors)
+        # an unparsable body, or none at all where a JSON object is required
+        malformed = any(e.get("type") == "json_invalid" or (e.get("type") == "missing" and tuple(e.get("loc", ())) ==
+                                                            ("body",)) for e in errors)
         return _error(400 if malformed else 422, str(error), error.field)
 
     @app.exception_handler(StarletteHTTPException)
@@ -343,6 +392,7 @@ def create_app(settings: ServiceSettings | None = None, service: PlanningService
         description="Plans paths a spherical robot can roll (spherical Hybrid A*). The same request and "
                     "result JSON as the `sphereplan` CLI and the Zenoh node.",
         lifespan=lifespan,
+        redirect_slashes=False,  # /v1/plan/ is an unknown route (404), not a redirect built from the Host header
     )
     app.state.service = svc
     app.include_router(health)
@@ -356,4 +406,6 @@ def create_app(settings: ServiceSettings | None = None, service: PlanningService
     app.include_router(viewer)
     install_error_handlers(app)
     app.add_middleware(BodyLimit, limit=settings.max_body_bytes)
+    if settings.http_token is not None:
+        app.add_middleware(BearerToken, token=settings.http_token)  # outermost: checked before the body is read
     return app

@@ -9,13 +9,14 @@ from __future__ import annotations
 
 import logging
 import os
+import time
 from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from planner.errors import InvalidInput, PlanningError, SpherePlanError
+from planner.errors import InvalidInput, PlannerTimedOut, PlanningError, SpherePlanError
 from planner.occupancy import OccupancyGrid
 from planner.robot import load_robot
 from service.grids import load_grid
@@ -29,6 +30,20 @@ if TYPE_CHECKING:
     from service.wire import InlineGrid
 
 log = logging.getLogger(__name__)
+
+#: the worker's cancel flag (a shared byte the supervising pool sets), when running in a SupervisedPool
+_CANCEL_FLAG: Any = None
+
+
+def set_cancel_flag(flag: Any) -> None:
+    """Called once in each worker process by :mod:`service.pool` with the flag it sets to cancel a job."""
+    global _CANCEL_FLAG
+    _CANCEL_FLAG = flag
+
+
+def cancelled() -> bool:
+    """True once the pool asked this worker to stop its job (the planner polls it between search chunks)."""
+    return _CANCEL_FLAG is not None and bool(_CANCEL_FLAG.value)
 
 
 def worker_init() -> None:
@@ -68,6 +83,12 @@ def _job(name: str, compute: Callable[[], Any], plan_robot: Callable[[], Any] | 
         return outcome_of_exception(exc, plan_robot() if plan_robot is not None else None)
     except SpherePlanError as exc:
         return outcome_of_exception(exc)
+    except MemoryError:
+        log.warning("%s: the job reached the per-worker memory ceiling", name)
+        return error_outcome(InvalidInput, f"the {name} computation needs more memory than this server allows "
+                                           "per job; ask for less (a coarser grid, fewer states, a closer goal)")
+    except RecursionError:
+        return error_outcome(InvalidInput, f"the {name} input is nested too deeply")
     except (ValueError, ArithmeticError) as exc:
         log.warning("%s: computation failed for a request", name, exc_info=True)
         return error_outcome(InvalidInput, f"the {name} computation failed for this input: {type(exc).__name__}: {exc}")
@@ -82,7 +103,15 @@ def plan_job(query: PlanQuery, robot_name: str | None, source: Path | InlineGrid
 
     def compute() -> dict[str, Any]:
         robot = load_robot(robot_name)
-        return execute_plan(query, load_grid(source, robot_name), robot).to_json()
+        grid = load_grid(source, robot_name)  # not counted: cached per worker, a mesh's first load is slow
+        t0 = time.perf_counter()
+        result = execute_plan(query, grid, robot, cancel=cancelled).to_json()
+        # the time limit covers the whole plan, smoothing and result building included, not only the search
+        limit = query.effective_time_limit_s
+        elapsed = time.perf_counter() - t0
+        if elapsed > limit:
+            raise PlannerTimedOut(f"the plan took {elapsed:.3g} s, over its time limit of {limit:g} s")
+        return result
 
     return _job("plan", compute, plan_robot=lambda: load_robot(robot_name).to_json())
 

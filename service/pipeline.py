@@ -8,8 +8,11 @@ through. Kept free of pydantic and the web stack so that the CLI's cold start st
 
 from __future__ import annotations
 
+import math
+from collections.abc import Callable
 from dataclasses import dataclass, replace
 
+from planner.errors import GoalOutsideMap, InvalidInput, StartOutsideMap
 from planner.hybrid_astar.plan import plan_path
 from planner.hybrid_astar.search import PlannerOptions, Pose
 from planner.occupancy import OccupancyGrid
@@ -27,14 +30,58 @@ class PlanQuery:
     options: PlannerOptions
     time_limit_s: float | None = None
 
+    @property
+    def effective_time_limit_s(self) -> float:
+        """The limit the plan runs under: the request's own, else the options'."""
+        return float(self.options.time_limit_s if self.time_limit_s is None else self.time_limit_s)
 
-def execute_plan(query: PlanQuery, grid: OccupancyGrid, robot: RobotProfile) -> PlanResult:
+
+#: most states a plan result may hold (~100 bytes of JSON each: a 20 MB reply)
+MAX_RESULT_STATES = 200_000
+#: a plan is assumed at most this many map diagonals (plus the start–goal distance) long when bounding its states
+MAX_DETOUR_DIAGONALS = 4
+
+
+def check_on_map(query: PlanQuery, grid: OccupancyGrid) -> None:
+    """Raise Start/GoalOutsideMap for a pose off the grid, in floating point (a pose like 1e308 would
+    overflow the planner's cell arithmetic)."""
+    height, width = grid.data.shape
+    x0, y0 = grid.origin[0], grid.origin[1]
+    for pose, which, error in ((query.start, "start", StartOutsideMap), (query.goal, "goal", GoalOutsideMap)):
+        x, y = pose[0], pose[1]
+        if not (x0 <= x < x0 + width * grid.resolution_m and y0 <= y < y0 + height * grid.resolution_m):
+            raise error(f"{which} ({x:.6g}, {y:.6g}) is outside the map {grid.name!r}")
+
+
+def check_result_size(query: PlanQuery, grid: OccupancyGrid) -> None:
+    """Refuse, before planning, a plan whose result could hold more than ``MAX_RESULT_STATES`` states.
+
+    The result holds one state every ``options.state_spacing_m`` along the path; the path is taken to be at
+    most the start–goal distance plus ``MAX_DETOUR_DIAGONALS`` diagonals of the map long.
+    """
+    height, width = grid.data.shape
+    diagonal = math.hypot(width, height) * grid.resolution_m
+    distance = math.dist(query.start[:2], query.goal[:2])
+    spacing = query.options.state_spacing_m
+    states = (distance + MAX_DETOUR_DIAGONALS * diagonal) / spacing
+    if states > MAX_RESULT_STATES:
+        least = (distance + MAX_DETOUR_DIAGONALS * diagonal) / MAX_RESULT_STATES
+        raise InvalidInput("options.state_spacing_m", f"{spacing:g} m could return up to {states:.3g} states on "
+                                                      f"this map; at most {MAX_RESULT_STATES} are returned "
+                                                      f"(use ≥ {least:.3g} m)")
+
+
+def execute_plan(query: PlanQuery, grid: OccupancyGrid, robot: RobotProfile,
+                 cancel: Callable[[], bool] | None = None) -> PlanResult:
     """Plan ``query`` on ``grid``.
 
     The time limit is passed to the planner per call rather than baked into the options, so that the
     cached planner (distance transform, heuristic grid) is reused across requests with different limits.
-    Raises the typed planning errors.
+    ``cancel`` is polled between search chunks (:class:`~planner.errors.PlannerCancelled` when it says
+    True). Raises the typed planning errors.
     """
-    time_limit = query.options.time_limit_s if query.time_limit_s is None else query.time_limit_s
+    check_on_map(query, grid)
+    check_result_size(query, grid)
     options = replace(query.options, time_limit_s=PlannerOptions.time_limit_s)
-    return plan_path(grid, robot, query.start, query.goal, options, time_limit_s=float(time_limit))
+    return plan_path(grid, robot, query.start, query.goal, options, time_limit_s=query.effective_time_limit_s,
+                     cancel=cancel)

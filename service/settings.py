@@ -24,7 +24,12 @@ class ServiceSettings:
 
     ``maps_dir`` None means the shipped maps (:func:`planner.maps.catalogue.default_maps_dir`).
     ``max_in_flight`` 0 means 4 jobs per worker. ``zenoh_listen`` is the default peer's only endpoint
-    (ignored when ``zenoh_config`` names a Zenoh config file). ``max_body_bytes`` bounds HTTP bodies.
+    (ignored when ``zenoh_config`` names a Zenoh config file). ``max_body_bytes`` bounds HTTP bodies and
+    Zenoh payloads. ``worker_memory_mb`` is each worker process's address-space ceiling (0: none): a job
+    that reaches it is answered as bad input instead of growing until the machine kills something.
+    ``max_job_s`` is the wall-clock deadline of a job without a time limit of its own (everything but a
+    plan, whose deadline is its time limit). ``http_token``, when set, is the bearer token every HTTP
+    route but the health probes requires.
     """
 
     maps_dir: Path | None = None
@@ -34,6 +39,9 @@ class ServiceSettings:
     max_inline_cells: int = MAX_INLINE_CELLS
     max_body_bytes: int = 4_000_000
     retry_after_s: int = 1
+    worker_memory_mb: int = 2048
+    max_job_s: float = 300.0
+    http_token: str | None = None
     warm_up: bool = True
     zenoh: bool = True
     zenoh_config: Path | None = None
@@ -58,6 +66,9 @@ class ServiceSettings:
         need(1 <= self.max_inline_cells <= MAX_INLINE_CELLS, "max_inline_cells",
              f"must be in [1, {MAX_INLINE_CELLS}], got {self.max_inline_cells}")
         need(self.max_body_bytes >= 1024, "max_body_bytes", f"must be ≥ 1024, got {self.max_body_bytes}")
+        need(self.worker_memory_mb == 0 or self.worker_memory_mb >= 512, "worker_memory_mb",
+             f"must be 0 (no ceiling) or ≥ 512, got {self.worker_memory_mb}")
+        need(math.isfinite(self.max_job_s) and self.max_job_s >= 1, "max_job_s", f"must be ≥ 1 s, got {self.max_job_s}")
         need(self.retry_after_s >= 1, "retry_after_s", f"must be ≥ 1, got {self.retry_after_s}")
         need(0 <= self.ros2_domain_id <= 232, "ros2_domain_id", f"must be in [0, 232], got {self.ros2_domain_id}")
         need(not self.ros2 or self.zenoh, "ros2", "needs the Zenoh node (drop --no-zenoh)")

@@ -14,7 +14,12 @@ Key expressions (payloads are the same JSON as the HTTP API, encoding ``applicat
   goal is always applied first: each new goal is planned from that robot's latest pose; the
   service publishes the plan result on ``sphereplan/<robot_id>/path`` and ``{robot_id, goal_id, state,
   error_code, error_msg, ...}`` on ``sphereplan/<robot_id>/status`` (``planning``, then ``succeeded``
-  or ``failed``). A goal superseded by a newer one before its plan finished publishes nothing more.
+  or ``failed``). The newest goal wins: a new goal cancels the plan in flight for the robot's previous
+  one (freeing its slot first, so a goal is never refused because of the goals it replaces); the
+  superseded goal publishes ``superseded`` and no path.
+* Every payload is bounded like an HTTP body (``max_body_bytes``, checked by length before it is read)
+  and a malformed or too deeply nested one is answered with the error JSON naming ``body`` (a query's
+  ``reply_err``; on the topics an ``invalid_pose`` / ``invalid_goal`` status).
 * a liveliness token ``sphereplan/planner/<zid>`` announces the planner while it runs.
 
 Default session: peer mode, listening on ``tcp/127.0.0.1:7447`` only, multicast scouting off, so the
@@ -73,18 +78,28 @@ def node_config(settings: ServiceSettings) -> zenoh.Config:
     return default_config(settings.zenoh_listen)
 
 
-def parse(model: type[M], payload: zenoh.ZBytes | None) -> M:
-    """Validate a JSON payload against a wire model; raises :class:`InvalidInput` naming the field."""
+def parse(model: type[M], payload: zenoh.ZBytes | None, limit: int) -> M:
+    """Validate a JSON payload against a wire model; raises :class:`InvalidInput` naming the field.
+
+    A payload over ``limit`` bytes (the HTTP body limit) is refused by its length, before it is copied or
+    parsed; one nested too deeply for the parser is refused like malformed JSON."""
     if payload is None:
         raise InvalidInput("body", "a JSON payload is required")
+    size = len(payload)
+    if size > limit:
+        raise InvalidInput("body", f"payload of {size} bytes; this server accepts at most {limit}")
     try:
         data = json.loads(payload.to_bytes())
     except (UnicodeDecodeError, json.JSONDecodeError) as exc:
         raise InvalidInput("body", f"malformed JSON: {exc}") from None
+    except RecursionError:
+        raise InvalidInput("body", "malformed JSON: nested too deeply") from None
     try:
         return model.model_validate(data)
     except ValidationError as exc:
         raise invalid_input(exc.errors()) from None
+    except RecursionError:
+        raise InvalidInput("body", "nested too deeply") from None
 
 
 def undeclare_all(entities: list[Any]) -> None:
@@ -121,6 +136,7 @@ class ZenohNode:
         self._poses: dict[str, PoseIn] = {}
         self._goal_ids: dict[str, int] = {}
         self.ros2: Any = None  # the rmw_zenoh face (service.ros2_zenoh), with settings.ros2
+        self._plans: dict[str, Future[Outcome]] = {}  # robot → the plan in flight for its newest goal
         # one entry per queryable capability: key suffix → (request model, submit)
         self.queryables: dict[str, tuple[type[BaseModel], Callable[[Any], Future[Outcome]]]] = {
             "plan": (PlanRequest, service.submit_plan),
@@ -165,7 +181,7 @@ class ZenohNode:
                        submit: Callable[[Any], Future[Outcome]]) -> Callable[[zenoh.Query], None]:
         def on_query(query: zenoh.Query) -> None:
             try:
-                future = submit(parse(model, query.payload))
+                future = submit(parse(model, query.payload, self.settings.max_body_bytes))
             except Exception as exc:
                 self._answer(query, key, refusal(exc, f"query on {key}"))
                 return
@@ -216,15 +232,18 @@ class ZenohNode:
 
     def _on_robot_sample(self, sample: zenoh.Sample) -> None:
         topic = str(sample.key_expr).rsplit("/", 1)[-1]
-        if topic == "pose":
-            self._on_pose(sample)
-        elif topic == "goal":
-            self._on_goal(sample)
+        try:
+            if topic == "pose":
+                self._on_pose(sample)
+            elif topic == "goal":
+                self._on_goal(sample)
+        except Exception:  # a bug: logged, and the subscriber keeps running
+            log.exception("handling a sample on %s failed", sample.key_expr)
 
     def _on_pose(self, sample: zenoh.Sample) -> None:
         robot_id = self._robot_id(sample)
         try:
-            pose = parse(PoseMessage, sample.payload).as_pose_in()
+            pose = parse(PoseMessage, sample.payload, self.settings.max_body_bytes).as_pose_in()
         except InvalidInput as exc:
             self._status(robot_id, self._goal_ids.get(robot_id, 0), "invalid_pose", outcome_of_exception(exc))
             return
@@ -234,7 +253,7 @@ class ZenohNode:
     def _on_goal(self, sample: zenoh.Sample) -> None:
         robot_id = self._robot_id(sample)
         try:
-            goal = parse(GoalMessage, sample.payload)
+            goal = parse(GoalMessage, sample.payload, self.settings.max_body_bytes)
         except InvalidInput as exc:
             # a malformed goal is reported but does not cancel the goal being planned
             self._status(robot_id, self._goal_ids.get(robot_id, 0), "invalid_goal", outcome_of_exception(exc))
@@ -243,6 +262,10 @@ class ZenohNode:
             goal_id = self._goal_ids.get(robot_id, 0) + 1
             self._goal_ids[robot_id] = goal_id
             pose = self._poses.get(robot_id)
+            previous = self._plans.pop(robot_id, None)
+        if previous is not None:
+            # the newest goal wins: the plan for the one it replaces is cancelled, and its slot freed, first
+            self.service.cancel(previous)
         if pose is None:
             self._status(robot_id, goal_id, "failed", error_outcome(
                 InvalidInput, f"no pose received yet on {PREFIX}/{robot_id}/pose to plan from", "pose",
@@ -253,11 +276,22 @@ class ZenohNode:
         except Exception as exc:
             self._status(robot_id, goal_id, "failed", refusal(exc, f"goal of {robot_id}"))
             return
+        with self._lock:
+            if self._goal_ids.get(robot_id) == goal_id:
+                self._plans[robot_id] = future
+                newest = True
+            else:
+                newest = False  # a newer goal arrived while this one was being submitted
+        if not newest:
+            self.service.cancel(future)
         goal_pose = dict(zip(("x", "y", "yaw"), goal.goal.as_pose(), strict=True))
         self._status(robot_id, goal_id, "planning", start=pose.model_dump(), goal=goal_pose)
-        future.add_done_callback(lambda done: self._goal_done(robot_id, goal_id, done.result()))
+        future.add_done_callback(lambda done: self._goal_done(robot_id, goal_id, done, done.result()))
 
-    def _goal_done(self, robot_id: str, goal_id: int, outcome: Outcome) -> None:
+    def _goal_done(self, robot_id: str, goal_id: int, future: Future[Outcome], outcome: Outcome) -> None:
+        with self._lock:
+            if self._plans.get(robot_id) is future:
+                del self._plans[robot_id]
         if self._goal_ids.get(robot_id) != goal_id:
             self._status(robot_id, goal_id, "superseded")  # a newer goal replaced this one: no path published
             return

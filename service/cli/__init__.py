@@ -60,6 +60,15 @@ def main(argv: Sequence[str] | None = None) -> int:
         answer = answer_for(exc)
         sys.stderr.write(f"sphereplan {args.verb}: {answer.cli_label}: {exc}\n")
         return answer.exit_code
+    except RecursionError:  # json.loads of an absurdly nested --options or input file
+        sys.stderr.write(f"sphereplan {args.verb}: error: an input is nested too deeply\n")
+        return EXIT_BAD_INPUT
+    except Exception as exc:  # a bug: one line, exit 1; the traceback only with --verbose
+        logging.getLogger(__name__).debug("%s failed", args.verb, exc_info=True)
+        answer = answer_for(exc)
+        sys.stderr.write(f"sphereplan {args.verb}: {answer.cli_label}: {type(exc).__name__}: {exc} "
+                         "(a bug: run with -v for the traceback)\n")
+        return answer.exit_code
 
 
 if __name__ == "__main__":

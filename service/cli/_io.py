@@ -32,11 +32,42 @@ def positive_float(text: str) -> float:
     return value
 
 
-def emit_json(result: Any, out: str | Path | None) -> None:
-    """Print ``result`` as JSON on stdout, or write it to ``out`` when given."""
+def check_output(path: str | Path | None, field: str, formats: set[str] | None = None) -> None:
+    """Before any work: ``path`` (an option naming a file to write) must be a file in an existing folder,
+    with one of ``formats`` as its extension when given; else :class:`InvalidInput` naming ``field``."""
+    if not path:
+        return
+    p = Path(path)
+    if p.is_dir():
+        raise InvalidInput(field, f"{p} is a folder; give a file name")
+    if not p.parent.is_dir():
+        raise InvalidInput(field, f"folder {p.parent} does not exist")
+    if formats is not None and p.suffix.lower().lstrip(".") not in formats:
+        raise InvalidInput(field, f"unsupported image format {p.suffix or '(none)'!r}; use one of "
+                                  f"{', '.join(sorted(formats))}")
+
+
+def plot_formats() -> set[str]:
+    """The image formats matplotlib can write (the extensions a ``--plot`` file may have)."""
+    from matplotlib.backend_bases import FigureCanvasBase
+
+    return set(FigureCanvasBase.get_supported_filetypes())
+
+
+def write_file(path: str | Path, field: str, write: Any) -> None:
+    """Call ``write()`` (which writes ``path``), turning a file system refusal into bad input naming ``field``."""
+    try:
+        write()
+    except OSError as exc:
+        raise InvalidInput(field, f"cannot write {path}: {exc.strerror or exc}") from None
+
+
+def emit_json(result: Any, out: str | Path | None, field: str = "--out") -> None:
+    """Print ``result`` as JSON on stdout, or write it to ``out`` when given (a refusal is bad input
+    naming ``field``)."""
     text = json.dumps(result, indent=2, allow_nan=False)
     if out:
-        Path(out).write_text(text + "\n")
+        write_file(out, field, lambda: Path(out).write_text(text + "\n"))
     else:
         sys.stdout.write(text + "\n")
 
@@ -50,6 +81,8 @@ def read_json_file(path: str | Path, field: str) -> Any:
         return json.loads(p.read_text())
     except (json.JSONDecodeError, UnicodeDecodeError) as exc:
         raise InvalidInput(field, f"{p} is not valid JSON: {exc}") from None
+    except RecursionError:
+        raise InvalidInput(field, f"{p} is nested too deeply") from None
 
 
 def is_mcap_out(out: str | Path | None) -> bool:
@@ -60,7 +93,7 @@ def emit_result(result: Any, out: str | Path | None, write_mcap: Callable[[str],
     """``--out``: a name ending in ``.mcap`` gets ROS 2 messages (``write_mcap(out)``) and the JSON goes to
     stdout; any other name gets the JSON; no name prints the JSON."""
     if out is not None and is_mcap_out(out):
-        write_mcap(str(out))
+        write_file(out, "--out", lambda: write_mcap(str(out)))
         emit_json(result, None)
     else:
         emit_json(result, out)
@@ -88,6 +121,6 @@ def read_map_arg(path: str, topic: str | None, robot: Any = None) -> OccupancyGr
         return read_bag_map(path, topic)
     if topic is not None:
         raise InvalidInput("--map-topic", "only applies to an MCAP file or a rosbag2 folder given as --map")
-    from planner.maps.load import load_any
+    from service.grids import read_map
 
-    return load_any(path, robot)
+    return read_map(path, robot, "--map")

@@ -11,7 +11,15 @@ from planner.hybrid_astar.plot import plot_plan
 from planner.hybrid_astar.search import PlannerOptions
 from planner.result import failure_json
 from planner.robot import load_robot
-from service.cli._io import emit_result, finite_float, positive_float, read_map_arg
+from service.cli._io import (
+    check_output,
+    emit_result,
+    finite_float,
+    plot_formats,
+    positive_float,
+    read_map_arg,
+    write_file,
+)
 from service.outcome import EXIT_OK
 from service.pipeline import PlanQuery, execute_plan
 from service.ros import write_plan_mcap
@@ -48,6 +56,8 @@ def _query(args: argparse.Namespace) -> PlanQuery:
             options = json.loads(args.options)
         except json.JSONDecodeError as exc:
             raise InvalidInput("--options", f"is not valid JSON: {exc}") from None
+        except RecursionError:
+            raise InvalidInput("--options", "is nested too deeply") from None
         if not isinstance(options, dict):
             raise InvalidInput("--options", "must be a JSON object")
     if args.reverse:
@@ -65,6 +75,9 @@ def _pose(p: tuple[float, float, float]) -> dict[str, float]:
 def run(args: argparse.Namespace) -> int:
     robot = load_robot(args.robot)
     query = _query(args)  # before the map is read
+    check_output(args.out, "--out")
+    if args.plot:
+        check_output(args.plot, "--plot", plot_formats())
     grid = read_map_arg(args.map, args.map_topic, robot)
     try:
         result = execute_plan(query, grid, robot)
@@ -73,11 +86,14 @@ def run(args: argparse.Namespace) -> int:
                     lambda out: write_plan_mcap(
                         out, {"start": _pose(query.start), "goal": _pose(query.goal), "robot": robot.to_json()}, grid))
         if args.plot:
-            plot_plan(grid, robot, None, query.start, query.goal, args.plot, title=f"{grid.name}: no path ({exc.code})")
+            title = f"{grid.name}: no path ({exc.code})"
+            write_file(args.plot, "--plot",
+                       lambda: plot_plan(grid, robot, None, query.start, query.goal, args.plot, title=title))
         raise
     body = result.to_json()
     emit_result(body, args.out, lambda out: write_plan_mcap(out, body, grid))
     if args.plot:
-        plot_plan(grid, robot, result.states, query.start, query.goal, args.plot,
-                  title=f"{grid.name}: {robot.name}, {result.length_m:.2f} m in {result.planning_time_s * 1000:.0f} ms")
+        title = f"{grid.name}: {robot.name}, {result.length_m:.2f} m in {result.planning_time_s * 1000:.0f} ms"
+        write_file(args.plot, "--plot",
+                   lambda: plot_plan(grid, robot, result.states, query.start, query.goal, args.plot, title=title))
     return EXIT_OK

@@ -9,10 +9,16 @@ from __future__ import annotations
 
 import argparse
 import logging
+import threading
 from pathlib import Path
+from types import FrameType
+from typing import TYPE_CHECKING
 
 from planner.errors import InvalidInput
 from service.settings import MAX_TIME_LIMIT_S, ServiceSettings
+
+if TYPE_CHECKING:
+    from service.core import PlanningService
 
 VERB = "serve"
 HELP = "serve planning over HTTP (FastAPI) and Zenoh from one process"
@@ -60,7 +66,39 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="jobs queued or running before 503 (default 4 per worker)")
     parser.add_argument("--max-time-limit", type=float, default=MAX_TIME_LIMIT_S,
                         help=f"largest time_limit_s a request may ask (default {MAX_TIME_LIMIT_S:g})")
+    parser.add_argument("--worker-memory", type=_count, default=2048, metavar="MB",
+                        help="address-space ceiling of each worker process, MB (0 = none; default 2048)")
+    parser.add_argument("--token-file", default=None, metavar="FILE",
+                        help="require 'Authorization: Bearer <token>' on every route but /healthz and /readyz; "
+                             "the token is the file's first line")
+    parser.add_argument("--insecure", action="store_true",
+                        help="allow binding a non-loopback --host without --token-file")
     parser.set_defaults(func=run)
+
+
+def _loopback(host: str) -> bool:
+    import ipaddress
+
+    if host == "localhost":
+        return True
+    try:
+        return ipaddress.ip_address(host).is_loopback
+    except ValueError:  # a host name: it may resolve to anything
+        return False
+
+
+def read_token(path: str) -> str:
+    """The bearer token: the first line of ``path`` (at least 16 characters)."""
+    p = Path(path)
+    try:
+        token = p.read_text().splitlines()[0].strip() if p.is_file() else None
+    except (OSError, UnicodeDecodeError, IndexError):
+        token = None
+    if token is None:
+        raise InvalidInput("--token-file", f"{path} is not a readable text file with the token on its first line")
+    if len(token) < 16:
+        raise InvalidInput("--token-file", "the token must be at least 16 characters")
+    return token
 
 
 def settings_from_args(args: argparse.Namespace) -> ServiceSettings:
@@ -72,11 +110,35 @@ def settings_from_args(args: argparse.Namespace) -> ServiceSettings:
     zenoh_config = Path(args.zenoh_config) if args.zenoh_config else None
     if zenoh_config is not None and not zenoh_config.is_file():
         raise InvalidInput("--zenoh-config", f"{zenoh_config} is not a file")
+    token = read_token(args.token_file) if args.token_file else None
+    if token is None and not _loopback(args.host) and not args.insecure:
+        raise InvalidInput("--host", f"{args.host} is not a loopback address: give --token-file (or --insecure to "
+                                     "serve without authentication)")
     return ServiceSettings(maps_dir=maps_dir, workers=args.workers, max_in_flight=args.max_in_flight,
                            max_time_limit_s=args.max_time_limit, zenoh=not args.no_zenoh,
                            zenoh_config=zenoh_config, zenoh_listen=args.zenoh_listen, ros2=args.ros2,
                            ros2_domain_id=args.ros2_domain, ros2_namespace=args.ros2_namespace,
-                           ros2_map=args.ros2_map, ros2_robot=args.ros2_robot)
+                           ros2_map=args.ros2_map, ros2_robot=args.ros2_robot,
+                           worker_memory_mb=args.worker_memory, http_token=token)
+
+
+def _server_class() -> type:
+    import uvicorn
+
+    class Server(uvicorn.Server):
+        """uvicorn that, on SIGTERM/Ctrl-C, first has the service answer every job in flight with the JSON
+        503 "shutting down", so open requests end before uvicorn stops waiting for them."""
+
+        def __init__(self, config: uvicorn.Config, service: PlanningService) -> None:
+            super().__init__(config)
+            self.service = service
+
+        def handle_exit(self, sig: int, frame: FrameType | None) -> None:
+            # in a thread: a signal handler must not take the service's locks the interrupted code may hold
+            threading.Thread(target=self.service.begin_shutdown, name="sphereplan-shutdown").start()
+            super().handle_exit(sig, frame)
+
+    return Server
 
 
 def run(args: argparse.Namespace) -> int:
@@ -86,9 +148,10 @@ def run(args: argparse.Namespace) -> int:
 
     settings = settings_from_args(args)
     logging.getLogger("service").setLevel(logging.INFO)
-    config = uvicorn.Config(create_app(settings), host=args.host, port=args.port, lifespan="on",
+    app = create_app(settings)
+    config = uvicorn.Config(app, host=args.host, port=args.port, lifespan="on",
                             timeout_graceful_shutdown=GRACEFUL_SHUTDOWN_S, log_level="info")
-    server = uvicorn.Server(config)
+    server = _server_class()(config, app.state.service)
     try:
         server.run()
     except KeyboardInterrupt:  # uvicorn re-raises the Ctrl-C it handled, after a clean shutdown

@@ -144,3 +144,15 @@ def release() -> tuple[int, float] | None:
         server, _shared = _shared, None
         return server.stop()
     return None
+
+
+ZENOH_CLIENT = Path(__file__).with_name("zenoh_client.py")
+
+
+def zenoh_steps(server: Server, steps: list[dict[str, Any]], timeout_s: float = 300) -> list[dict[str, Any]]:
+    """Run the steps in a separate Zenoh client process (``zenoh_client.py``); its answers, one per step."""
+    done = subprocess.run([sys.executable, str(ZENOH_CLIENT), server.zenoh_endpoint], input=json.dumps(steps),
+                          capture_output=True, text=True, timeout=timeout_s, check=False)
+    assert done.returncode == 0, done.stderr
+    answers: list[dict[str, Any]] = json.loads(done.stdout)
+    return answers

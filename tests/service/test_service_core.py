@@ -190,27 +190,3 @@ def test_map_png_is_north_up_with_map_server_shades() -> None:
     with Image.open(io.BytesIO(png)) as image:
         assert image.mode == "L" and image.size == (2, 2)
         assert np.asarray(image).tolist() == [[205, 127], [254, 0]]
-
-
-def test_a_crashed_worker_restarts_the_pool_once(maps_dir: Path) -> None:
-    from concurrent.futures.process import BrokenProcessPool
-
-    executors: list[NeverDone] = []
-
-    def factory(workers: int) -> Executor:
-        executors.append(NeverDone())
-        return executors[-1]
-
-    service = PlanningService(ServiceSettings(maps_dir=maps_dir, workers=1, max_in_flight=4, zenoh=False,
-                                              warm_up=False), factory)
-    service.start()
-    request = PlanRequest.model_validate(plan_body())
-    jobs = [service.submit_plan(request) for _ in range(3)]
-    for future in executors[0].futures:  # one worker died: every job of that pool fails at once
-        future.set_exception(BrokenProcessPool("a worker died"))
-    assert [j.result(timeout=1).kind for j in jobs] == ["internal"] * 3
-    assert len(executors) == 2  # the broken pool was replaced exactly once
-    assert service.in_flight == 0
-    service.submit_plan(request)
-    assert len(executors[1].futures) == 1  # new jobs go to the new pool
-    service.close()

@@ -3,9 +3,6 @@
 from __future__ import annotations
 
 import json
-import subprocess
-import sys
-from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
@@ -13,7 +10,6 @@ import httpx
 import pytest
 
 from service.cli import main as cli_main
-from tests.service import service_harness as harness
 from tests.service.service_harness import (
     HALL_GOAL,
     HALL_START,
@@ -22,25 +18,10 @@ from tests.service.service_harness import (
     plan_body,
     strip_sim_timing,
     strip_timing,
+    zenoh_steps,
 )
 
-CLIENT = Path(__file__).with_name("zenoh_client.py")
 RECONFIGURE = {"start": [2.0, 2.0], "start_tilt": [30.0, 75.0], "goal": [3.5, 3.0], "degrees": True, "map": "hall"}
-
-
-@pytest.fixture(scope="session")
-def server() -> Iterator[Server]:
-    yield harness.acquire()
-    harness.release()
-
-
-def zenoh_steps(server: Server, steps: list[dict[str, Any]]) -> list[dict[str, Any]]:
-    """Run the steps in a separate client process; its answers, one per step."""
-    done = subprocess.run([sys.executable, str(CLIENT), server.zenoh_endpoint], input=json.dumps(steps),
-                          capture_output=True, text=True, timeout=120, check=False)
-    assert done.returncode == 0, done.stderr
-    answers: list[dict[str, Any]] = json.loads(done.stdout)
-    return answers
 
 
 @pytest.fixture(scope="module")
