@@ -21,6 +21,7 @@ from scipy.optimize import least_squares
 from planner.kinematics import arc_step, roll_shift, wrap
 
 SAMPLE_M = 0.01  # spacing of the interpolated states the word is read from
+MAX_SHOT_M = 10.0  # longer Reeds–Shepp shots are not tried (Nav2 Smac caps its analytic expansions too)
 LAND_TOL_M = 1e-4  # the rolled end must land this close to the goal (and within 1e-4 rad of its heading)
 
 
@@ -31,9 +32,10 @@ def _space(rho: float) -> Any:
     return ob.ReedsSheppStateSpace(rho)
 
 
-def car_word(start: tuple[float, float, float], goal: tuple[float, float, float], rho: float
-             ) -> list[tuple[int, int, float]]:
-    """The Reeds–Shepp path from ``start`` to ``goal`` as segments (turn −1/0/+1, direction ±1, length m)."""
+def car_word(start: tuple[float, float, float], goal: tuple[float, float, float], rho: float,
+             max_length_m: float = math.inf) -> list[tuple[int, int, float]]:
+    """The Reeds–Shepp path from ``start`` to ``goal`` as segments (turn −1/0/+1, direction ±1, length m);
+    empty when it is longer than ``max_length_m``."""
     space = _space(rho)
     a, b, out = space.allocState(), space.allocState(), space.allocState()
     for state, pose in ((a, start), (b, goal)):
@@ -42,7 +44,7 @@ def car_word(start: tuple[float, float, float], goal: tuple[float, float, float]
         yaw = wrap(float(pose[2]))
         state.setYaw(yaw if yaw < math.pi else -math.pi)  # OMPL's SO(2) is [−π, π)
     total = space.distance(a, b)
-    if total < 1e-9:
+    if total < 1e-9 or total > max_length_m:
         return []
     n = max(8, math.ceil(total / SAMPLE_M))
     pts = np.empty((n + 1, 3))
@@ -90,9 +92,10 @@ def sphere_shot(
     radius: float,
 ) -> list[tuple[float, float, float]] | None:
     """Motions (held roll, curvature, signed arc length) that roll the sphere from ``start`` (x, y, yaw, roll)
-    along the Reeds–Shepp word towards ``goal`` and land on it upright, or None when the lengths cannot be
-    solved (the sideways shifts of the roll changes do not fit the word's geometry)."""
-    word = car_word(start[:3], goal, rho)
+    along the Reeds–Shepp word towards ``goal`` and land on it upright, or None when the car's path is
+    longer than :data:`MAX_SHOT_M` or the lengths cannot be solved (the sideways shifts of the roll changes
+    do not fit the word's geometry)."""
+    word = car_word(start[:3], goal, rho, MAX_SHOT_M)
     if not word:
         return None
     turns = [t for t, _, _ in word]
