@@ -10,8 +10,6 @@ import argparse
 from pathlib import Path
 
 from planner.errors import NotFound
-from planner.maps.catalogue import default_maps_dir, list_maps
-from planner.maps.problems import list_problems
 from service.cli._io import emit_json
 
 VERB = "maps"
@@ -28,6 +26,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    from planner.maps.catalogue import default_maps_dir, list_maps
+    from planner.maps.problems import list_problems
+
     folder = args.maps if args.maps is not None else default_maps_dir()
     if not folder.is_dir():
         raise NotFound("maps", f"{str(folder)!r} is not a directory")

@@ -12,8 +12,6 @@ import argparse
 import sys
 from typing import Any
 
-import numpy as np
-
 from planner.errors import InvalidInput
 from service.cli._io import emit_json, positive_float, read_json_file
 
@@ -97,6 +95,8 @@ def _bench() -> int:
 def run(args: argparse.Namespace) -> int:
     if args.bench:
         return _bench()
+    import numpy as np
+
     from planner.closed_loop.simulate import SimulationOptions, simulate_plan
     from planner.closed_loop.tracker import MPCParams
     from planner.occupancy import OccupancyGrid

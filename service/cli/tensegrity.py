@@ -6,10 +6,6 @@ import argparse
 import math
 
 from planner.errors import InvalidInput
-from planner.robot import load_robot
-from planner.tensegrity import form_find, plan_gait, static_equilibria
-from planner.tensegrity.geometry import params_from_profile
-from planner.tensegrity.plot import plot_gait
 from service.cli._io import emit_json, finite_float
 
 VERB = "tensegrity"
@@ -64,6 +60,9 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _run_static(args: argparse.Namespace) -> int:
+    from planner.robot import load_robot
+    from planner.tensegrity import static_equilibria
+
     to_rad = math.radians if args.degrees else float
     result = static_equilibria(
         to_rad(args.theta1), to_rad(args.theta2), load_robot(args.robot), not args.no_verify
@@ -73,6 +72,11 @@ def _run_static(args: argparse.Namespace) -> int:
 
 
 def _run_gait(args: argparse.Namespace) -> int:
+    from planner.robot import load_robot
+    from planner.tensegrity import plan_gait
+    from planner.tensegrity.geometry import params_from_profile
+    from planner.tensegrity.plot import plot_gait
+
     profile = load_robot(args.robot)
     result = plan_gait(args.distance, profile, args.steps, args.start_state, args.corner, args.measure)
     if args.plot:
@@ -84,5 +88,8 @@ def _run_gait(args: argparse.Namespace) -> int:
 
 
 def _run_formfind(args: argparse.Namespace) -> int:
+    from planner.robot import load_robot
+    from planner.tensegrity import form_find
+
     emit_json(form_find(load_robot(args.robot), args.fix_centre, args.starts, args.seed), args.out)
     return 0

@@ -8,8 +8,6 @@ from pathlib import Path
 from typing import Any
 
 from planner.errors import InvalidInput
-from planner.robot import load_robot
-from planner.vpip import api
 from service.cli._io import emit_json, finite_float, positive_float, read_json_file
 
 VERB = "vpip"
@@ -21,6 +19,8 @@ def _angle(args: argparse.Namespace, value: float) -> float:
 
 
 def _rods(args: argparse.Namespace) -> int:
+    from planner.vpip import api
+
     emit_json(
         api.rods_report(
             _angle(args, args.phi_vpip),
@@ -35,11 +35,15 @@ def _rods(args: argparse.Namespace) -> int:
 
 
 def _radius(args: argparse.Namespace) -> int:
+    from planner.vpip import api
+
     emit_json(api.radius_report(_angle(args, args.roll), args.robot), None)
     return 0
 
 
 def _roll(args: argparse.Namespace) -> int:
+    from planner.vpip import api
+
     emit_json(api.roll_report(args.radius, args.robot, left=not args.right), None)
     return 0
 
@@ -52,6 +56,9 @@ def _read(path: str, field: str) -> str:
 
 
 def _calibrate(args: argparse.Namespace) -> int:
+    from planner.robot import load_robot
+    from planner.vpip import api
+
     profile = load_robot(args.robot)
     result = api.calibrate_report(_read(args.runs, "runs"), profile)
     if args.out:
@@ -63,6 +70,8 @@ def _calibrate(args: argparse.Namespace) -> int:
 
 
 def _schedule(args: argparse.Namespace) -> int:
+    from planner.vpip import api
+
     plan: Any = read_json_file(args.path, "path")
     result = api.schedule_report(plan, args.robot, args.driver)
     emit_json(result, args.out)
