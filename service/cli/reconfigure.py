@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 from typing import TYPE_CHECKING, Any
 
-from service.cli._io import emit_json, finite_float, positive_float
+from service.cli._io import add_degrees_flag, emit_json, finite_float, positive_float
 
 VERB = "reconfigure"
 HELP = "Plan a Spherobot reconfiguration (position, P on top, optional heading) and prove it by rolling."
@@ -42,9 +42,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--roll-rate", type=positive_float, metavar="W", help="shell rate in rad/s (default: profile)"
     )
-    parser.add_argument(
-        "--degrees", action="store_true", help="input angles are in degrees (output stays radians)"
-    )
+    add_degrees_flag(parser)
     parser.add_argument("--map", metavar="M.yaml", help="check the swept sphere against this map")
     parser.add_argument("--allow-unknown", action="store_true", help="treat unknown map cells as free")
     parser.add_argument("--plot", metavar="F.png", help="draw the ground path and P's track on the sphere")

@@ -13,7 +13,7 @@ import sys
 from typing import Any
 
 from planner.errors import InvalidInput
-from service.cli._io import emit_json, positive_float, read_json_file
+from service.cli._io import Stages, emit_json, positive_float, read_json_file
 
 VERB = "simulate"
 HELP = "roll a plan in closed loop (paper 001 MPC + odometry/GNSS fusion) and report tracking metrics"
@@ -138,17 +138,24 @@ def run(args: argparse.Namespace) -> int:
         mpc=MPCParams(horizon=args.horizon),
         time_limit_s=args.time_limit,
     )
-    result = simulate_plan(grid, plan, robot, seed=args.seed, noise=args.noise, options=options)
-    if args.plot:
-        from planner.closed_loop.plot import plot_simulation
+    with Stages("simulate", ["simulate", *(["plot"] if args.plot else [])]) as stages:
+        stages.start("simulate")
+        result = simulate_plan(grid, plan, robot, seed=args.seed, noise=args.noise, options=options)
+        if args.plot:
+            stages.start("plot")
+            from planner.closed_loop.plot import plot_simulation
 
-        plot_simulation(grid, plan, result, args.plot)
+            plot_simulation(grid, plan, result, args.plot)
     emit_json(result, args.out)
     m = result["metrics"]
     if args.out:
+        verdict = "reached the goal" if m["reached_goal"] else "did NOT reach the goal"
+        if m["stopped_at_estimated_goal"] and not m["reached_goal"]:
+            verdict += " (it stopped where its estimate put the goal)"
         sys.stderr.write(
-            f"cross-track rms {m['cross_track_rms_m']:.3f} m, max {m['cross_track_max_m']:.3f} m; final "
-            f"error {m['final_position_error_m']:.3f} m; clearance {m['min_clearance_m']:.3f} m; "
+            f"{verdict}: true end {m['final_position_error_m']:.3f} m from the path's end, estimate "
+            f"{m['estimate_error_final_m']:.3f} m off the truth; cross-track rms {m['cross_track_rms_m']:.3f} m, "
+            f"max {m['cross_track_max_m']:.3f} m; clearance {m['min_clearance_m']:.3f} m; "
             f"fallback steps {m['fallback_steps']}; fused error max {m['estimate_error_max_m']:.3f} m vs "
             f"odometry {m['odometry_error_max_m']:.3f} m\n"
         )
