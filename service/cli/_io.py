@@ -54,6 +54,12 @@ def set_verbosity(level: int) -> None:
     _verbosity = level
 
 
+def say(verb: str, message: str) -> None:
+    """A one-line summary on stderr (``sphereplan VERB: message``), unless ``-q``."""
+    if _verbosity >= 0:
+        sys.stderr.write(f"sphereplan {verb}: {message}\n")
+
+
 class Stages:
     """Progress through the named stages of one command, always on stderr (stdout may carry JSON).
 

@@ -4,12 +4,11 @@ from __future__ import annotations
 
 import argparse
 import json
-import sys
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from planner.errors import InvalidInput, PlanningError
-from service.cli._io import Stages, add_degrees_flag, angle, emit_json, finite_float, positive_float
+from service.cli._io import Stages, add_degrees_flag, angle, emit_json, finite_float, positive_float, say
 from service.outcome import EXIT_OK
 
 if TYPE_CHECKING:  # the planner's modules load numba and scipy: only when the verb runs (fast --help)
@@ -89,6 +88,6 @@ def run(args: argparse.Namespace) -> int:
                       title=f"{grid.name}: {robot.name}, {result.length_m:.2f} m in "
                             f"{result.planning_time_s * 1000:.0f} ms")
     if args.out:  # stdout is free: say where the result went (the README promised output)
-        sys.stderr.write(f"sphereplan plan: {result.length_m:.2f} m in {result.planning_time_s * 1000:.0f} ms, "
-                         f"wrote {args.out}{' and ' + args.plot if args.plot else ''}\n")
+        say("plan", f"{result.length_m:.2f} m in {result.planning_time_s * 1000:.0f} ms, "
+                    f"wrote {args.out}{' and ' + args.plot if args.plot else ''}")
     return EXIT_OK

@@ -13,7 +13,7 @@ import sys
 from typing import Any
 
 from planner.errors import InvalidInput
-from service.cli._io import Stages, emit_json, positive_float, read_json_file
+from service.cli._io import Stages, emit_json, positive_float, read_json_file, say
 
 VERB = "simulate"
 HELP = "roll a plan in closed loop (paper 001 MPC + odometry/GNSS fusion) and report tracking metrics"
@@ -152,11 +152,12 @@ def run(args: argparse.Namespace) -> int:
         verdict = "reached the goal" if m["reached_goal"] else "did NOT reach the goal"
         if m["stopped_at_estimated_goal"] and not m["reached_goal"]:
             verdict += " (it stopped where its estimate put the goal)"
-        sys.stderr.write(
+        say(
+            "simulate",
             f"{verdict}: true end {m['final_position_error_m']:.3f} m from the path's end, estimate "
             f"{m['estimate_error_final_m']:.3f} m off the truth; cross-track rms {m['cross_track_rms_m']:.3f} m, "
             f"max {m['cross_track_max_m']:.3f} m; clearance {m['min_clearance_m']:.3f} m; "
             f"fallback steps {m['fallback_steps']}; fused error max {m['estimate_error_max_m']:.3f} m vs "
-            f"odometry {m['odometry_error_max_m']:.3f} m\n"
+            f"odometry {m['odometry_error_max_m']:.3f} m",
         )
     return 0
