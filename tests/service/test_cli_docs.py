@@ -7,7 +7,8 @@ one scratch folder (``maps/`` is the repository's), so a file written by one exa
 would for a reader typing them. Each must exit 0; an output documented as JSON must be JSON on stdout and
 carry every ``"key":`` the documentation shows; the files named by ``--out``/``--plot``/``--png``/``--csv``
 must exist afterwards. Not run: ``sphereplan serve`` (runs until stopped; tests/service/test_cli_serve.py and
-test_http.py cover it) and ``sphereplan bench`` (minutes; test_cli_bench*.py run it on small sets).
+test_http.py cover it), ``sphereplan bench`` (minutes; test_cli_bench*.py run it on small sets) and
+lines that talk to a running server (``curl``, the load test); ``printf`` and ``python -c`` set-up lines run.
 
 Also here: ``--help`` loads none of the heavy libraries (the tool's and every verb's), and the outputs of
 the README's commands are ignored by git.
@@ -84,7 +85,9 @@ def _runnable(example: Example) -> bool:
     words = example.command.split()
     if "..." in example.command:
         return False  # a sketch, not a command
-    return not (words[0] == "sphereplan" and len(words) > 1 and words[1] in NOT_RUN)
+    if words[0] == "sphereplan":
+        return not (len(words) > 1 and words[1] in NOT_RUN)
+    return words[0] == "printf" or words[:2] == ["python", "-c"]  # set-up lines; curl etc. need a server
 
 
 EXAMPLES = [e for doc in DOCS for e in _examples(doc)]
