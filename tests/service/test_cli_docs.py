@@ -142,6 +142,10 @@ def test_documented_example_runs_as_shown(
             assert f'"{key}":' in text, f"{example.id}: documented key {key!r} missing from the output"
     elif shown.startswith("{"):  # a JSON document cut short by head: its first lines as shown
         assert proc.stdout.splitlines()[:2] == shown.splitlines()[:2]
+    elif shown and not shown.startswith("→"):  # a table: its header line as shown
+        header = next(line for line in shown.splitlines() if "maps in" not in line)
+        said = (proc.stdout + proc.stderr).splitlines()
+        assert any(header.split()[:4] == line.split()[:4] for line in said), f"{example.id}: {header!r} not said"
 
 
 def test_help_loads_no_heavy_library() -> None:
