@@ -161,11 +161,13 @@ def test_help_loads_no_heavy_library() -> None:
     assert proc.stdout.strip() == "[]"
 
 
-def test_real_maps_default_matches_the_benchmark() -> None:
+def test_choices_repeated_for_a_fast_help_match_the_planner() -> None:
     from planner.hybrid_astar.realbench import REAL_MAPS
-    from service.cli.bench import DEFAULT_REAL_MAPS
+    from planner.spherobot import request
+    from service.cli import bench, reconfigure
 
-    assert DEFAULT_REAL_MAPS == ",".join(REAL_MAPS)
+    assert bench.DEFAULT_REAL_MAPS == ",".join(REAL_MAPS)
+    assert reconfigure.METHODS == request.METHODS
 
 
 def test_readme_outputs_are_ignored_by_git() -> None:
