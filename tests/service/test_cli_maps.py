@@ -97,3 +97,11 @@ def test_maps_prints_a_table_by_default(capsys: pytest.CaptureFixture[str]) -> N
     assert lines[1].split()[:3] == ["map", "file", "kind"]
     garage = next(line for line in lines if line.startswith("garage "))
     assert "40 × 30" in garage and "0.05" in garage
+
+
+def test_binary_stl_bounds_read_directly_match_the_mesh_loader() -> None:
+    from planner.maps.catalogue import _binary_stl_bounds
+    from planner.maps.mesh_world import MeshWorld
+
+    lo, hi = _binary_stl_bounds(MAPS / "cave.stl")
+    assert (lo.tolist(), hi.tolist()) == MeshWorld.from_file(MAPS / "cave.stl").mesh.bounds.tolist()
