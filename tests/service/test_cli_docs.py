@@ -140,8 +140,9 @@ def test_documented_example_runs_as_shown(
         text = json.dumps(result)
         for key in re.findall(r'"([A-Za-z_][A-Za-z0-9_]*)":', shown):
             assert f'"{key}":' in text, f"{example.id}: documented key {key!r} missing from the output"
-    elif shown.startswith("{"):  # a JSON document cut short by head: its first lines as shown
-        assert proc.stdout.splitlines()[:2] == shown.splitlines()[:2]
+    elif shown.startswith("{"):  # a JSON document cut short by head: the keys shown, in the lines printed
+        for key in re.findall(r'"([A-Za-z_][A-Za-z0-9_]*)":', shown):
+            assert f'"{key}":' in proc.stdout, f"{example.id}: documented key {key!r} missing from the output"
     elif shown and not shown.startswith("→"):  # a table: its header line as shown
         header = next(line for line in shown.splitlines() if "maps in" not in line)
         said = (proc.stdout + proc.stderr).splitlines()

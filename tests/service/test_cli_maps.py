@@ -104,4 +104,4 @@ def test_binary_stl_bounds_read_directly_match_the_mesh_loader() -> None:
     from planner.maps.mesh_world import MeshWorld
 
     lo, hi = _binary_stl_bounds(MAPS / "cave.stl")
-    assert (lo.tolist(), hi.tolist()) == MeshWorld.from_file(MAPS / "cave.stl").mesh.bounds.tolist()
+    assert [lo.tolist(), hi.tolist()] == MeshWorld.from_file(MAPS / "cave.stl").mesh.bounds.tolist()
