@@ -84,3 +84,19 @@ def test_vpip_schedule_uses_daedalus_not_the_plans_robot(
     code = main(["-q", "vpip", "schedule", "--path", str(plan), "--out", str(out)])
     capsys.readouterr()
     assert code == 0 and json.loads(out.read_text())["robot"] == "daedalus"
+
+
+def test_vpip_schedule_that_does_not_reach_the_end_exits_3_and_says_so(
+    capsys: pytest.CaptureFixture[str], tmp_path: Path
+) -> None:
+    """The README's garage U-turn, forward only: daedalus cannot follow its turns and runs out of time."""
+    maps = Path(__file__).resolve().parents[2] / "maps"
+    plan = tmp_path / "plan.json"
+    assert main(["-q", "plan", "--map", str(maps / "garage.yaml"), "--start", "12", "8.05", "0", "--goal", "12",
+                 "23.55", "180", "--degrees", "--forward-only", "--out", str(plan)]) == 0
+    out = tmp_path / "sched.json"
+    code = main(["-q", "vpip", "schedule", "--path", str(plan), "--out", str(out)])
+    stdout, stderr = capsys.readouterr()
+    summary = json.loads(stdout)
+    assert code == 3 and not summary["reached_end"] and out.is_file()
+    assert "did not reach the end of the path" in stderr
