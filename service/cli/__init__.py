@@ -2,7 +2,12 @@
 
 Each verb lives in its own module of this package and exposes ``VERB`` (its name), ``HELP`` (one line)
 and ``add_arguments(parser)``; the parser's ``func`` default takes the parsed arguments and returns the
-exit code. Verbs are discovered, so a new capability adds one module and nothing else.
+exit code. Verbs are discovered, so a new capability adds one module and nothing else. A verb module
+imports only argparse-level things at the top and its planner modules inside ``run``: ``--help`` builds
+every verb's parser, and must not pay for numba, scipy or matplotlib (tests/service/test_cli_docs.py).
+
+Progress and logs go to stderr (stdout may carry JSON): ``-q`` silences the progress, ``-v`` adds INFO logs
+and stage times, ``-vv`` DEBUG; long verbs report their stages through :class:`service.cli._io.Stages`.
 
 Exit codes (docs/contracts.md) come from the one outcome table (:mod:`service.outcome`): 0 success,
 2 bad input (the message on stderr names the field; a start or goal outside the map or occupied too),
@@ -20,6 +25,7 @@ from collections.abc import Sequence
 
 from planner import __version__
 from planner.errors import SpherePlanError
+from service.cli._io import set_verbosity
 from service.outcome import EXIT_BAD_INPUT, answer_for
 
 
@@ -32,9 +38,21 @@ class _Parser(argparse.ArgumentParser):
         raise SystemExit(EXIT_BAD_INPUT)
 
 
+def _add_talk_flags(parser: argparse.ArgumentParser, top: bool) -> None:
+    """``-v``/``-q`` on the tool and on every verb (``sphereplan -q plan …`` = ``sphereplan plan … -q``).
+
+    A verb's copy has no default, so it does not overwrite what was given before the verb.
+    """
+    talk = parser.add_mutually_exclusive_group()
+    talk.add_argument("-v", "--verbose", action="count", default=0 if top else argparse.SUPPRESS,
+                      help="log what happens to stderr (-vv: debug); progress is on stderr by default")
+    talk.add_argument("-q", "--quiet", action="store_true", default=False if top else argparse.SUPPRESS,
+                      help="no progress, only errors on stderr")
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = _Parser(prog="sphereplan", description="Motion planning for spherical rolling robots.")
-    parser.add_argument("-v", "--verbose", action="store_true", help="log progress to stderr")
+    _add_talk_flags(parser, top=True)
     parser.add_argument("--version", action="version", version=f"sphereplan {__version__}")
     sub = parser.add_subparsers(dest="verb", required=True, parser_class=_Parser)
     for info in sorted(pkgutil.iter_modules(__path__), key=lambda m: m.name):
@@ -42,6 +60,7 @@ def build_parser() -> argparse.ArgumentParser:
             continue
         module = importlib.import_module(f"{__name__}.{info.name}")
         verb_parser = sub.add_parser(module.VERB, help=module.HELP, description=module.HELP)
+        _add_talk_flags(verb_parser, top=False)
         module.add_arguments(verb_parser)
     return parser
 
@@ -53,7 +72,10 @@ def main(argv: Sequence[str] | None = None) -> int:
         args = parser.parse_args(argv)
     except SystemExit as exc:  # argparse: --help (0) or a bad option (2, message already on stderr)
         return int(exc.code or 0) if not isinstance(exc.code, str) else EXIT_BAD_INPUT
-    logging.basicConfig(level=logging.INFO if args.verbose else logging.WARNING, format="%(levelname)s %(message)s")
+    verbosity = -1 if args.quiet else min(args.verbose, 2)
+    set_verbosity(verbosity)
+    level = {-1: logging.ERROR, 0: logging.WARNING, 1: logging.INFO, 2: logging.DEBUG}[verbosity]
+    logging.basicConfig(level=level, format="%(levelname)s %(name)s: %(message)s", stream=sys.stderr)
     try:
         return int(args.func(args))
     except SpherePlanError as exc:

@@ -10,22 +10,16 @@ from __future__ import annotations
 import argparse
 import json
 import sys
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from planner.errors import InvalidInput
-from planner.hybrid_astar.bench import cold_start_s, format_table, plot_bench, run_bench, write_csv
-from planner.hybrid_astar.realbench import (
-    REAL_MAPS,
-    format_real_table,
-    plot_real,
-    resolve_map,
-    run_real_bench,
-    write_real_csv,
-)
-from planner.hybrid_astar.search import PlannerOptions
-from planner.maps.problems import list_problems
-from planner.robot import load_robot
 from service.cli._io import finite_float, positive_float
+
+if TYPE_CHECKING:  # the benchmark's modules load numba, scipy and OMPL: only when the verb runs (fast --help)
+    from planner.hybrid_astar.search import PlannerOptions
+
+#: planner.hybrid_astar.realbench.REAL_MAPS, repeated so that --help does not import the benchmark
+DEFAULT_REAL_MAPS = "warehouse,depot,smoothers_world,100by100_20"
 
 VERB = "bench"
 HELP = "benchmark the Hybrid A* against OMPL BIT* and RRT* on the shipped problem sets or on Nav2's maps"
@@ -45,7 +39,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "plan times; mpc: MPC step times of the tracker; all: those three; real: random "
                              "problems on Nav2's maps against BIT* (minutes)")
     real = parser.add_argument_group("--suite real")
-    real.add_argument("--real-maps", default=",".join(REAL_MAPS),
+    real.add_argument("--real-maps", default=DEFAULT_REAL_MAPS,
                       help="comma-separated map names in maps/real or YAML paths (default: %(default)s)")
     real.add_argument("--per-map", type=int, default=6, help="problems drawn per map (default 6)")
     real.add_argument("--seed", type=int, default=0, help="seed of the problem draw (default 0)")
@@ -59,6 +53,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def _options(text: str | None) -> PlannerOptions:
+    from planner.hybrid_astar.search import PlannerOptions
+
     if not text:
         return PlannerOptions()
     try:
@@ -72,6 +68,9 @@ def _options(text: str | None) -> PlannerOptions:
 
 def run_real(args: argparse.Namespace) -> int:
     """``--suite real``: table on stdout, progress on stderr, CSV and PNG written."""
+    from planner.hybrid_astar.realbench import format_real_table, plot_real, resolve_map, run_real_bench, write_real_csv
+    from planner.robot import load_robot
+
     if args.per_map < 1:
         raise InvalidInput("--per-map", "must be ≥ 1")
     robot = load_robot(args.robot)
@@ -121,6 +120,10 @@ def run(args: argparse.Namespace) -> int:
         print(format_mpc_bench(bench_mpc()) + "\n")
     if args.suite not in ("planning", "all"):
         return 0
+    from planner.hybrid_astar.bench import cold_start_s, format_table, plot_bench, run_bench, write_csv
+    from planner.maps.problems import list_problems
+    from planner.robot import load_robot
+
     robot = load_robot(args.robot)
     problems = [p for p in list_problems(args.maps) if args.problems in p.name or args.problems in p.map]
     if not problems:

@@ -4,25 +4,26 @@ from __future__ import annotations
 
 import argparse
 import json
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from planner.errors import InvalidInput, PlanningError
-from planner.hybrid_astar.plot import plot_plan
-from planner.hybrid_astar.search import PlannerOptions
-from planner.result import failure_json
-from planner.robot import load_robot
 from service.cli._io import (
+    Stages,
+    add_degrees_flag,
+    angle,
     check_output,
     emit_result,
     finite_float,
     plot_formats,
     positive_float,
     read_map_arg,
+    say,
     write_file,
 )
 from service.outcome import EXIT_OK
-from service.pipeline import PlanQuery, execute_plan
-from service.ros import write_plan_mcap
+
+if TYPE_CHECKING:  # the planner's modules load numba and scipy: only when the verb runs (fast --help)
+    from service.pipeline import PlanQuery
 
 VERB = "plan"
 HELP = "plan a path the sphere can roll from START to GOAL on a map"
@@ -42,6 +43,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     direction.add_argument("--reverse", action="store_true",
                            help="allow reversing (the default for robots whose profile says reversible, as spheres)")
     direction.add_argument("--forward-only", action="store_true", help="never reverse")
+    add_degrees_flag(parser)
     parser.add_argument("--out", default=None, help="write the JSON here instead of stdout; a name ending in .mcap "
                         "writes ROS 2 messages (/map, /plan, /plan/footprints) and prints the JSON")
     parser.add_argument("--plot", default=None, help="write a PNG of the plan")
@@ -50,6 +52,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def _query(args: argparse.Namespace) -> PlanQuery:
     """The CLI arguments as the plan query every door builds (bad options are bad input here)."""
+    from planner.hybrid_astar.search import PlannerOptions
+    from service.pipeline import PlanQuery
+
     options: dict[str, Any] = {}
     if args.options:
         try:
@@ -65,7 +70,8 @@ def _query(args: argparse.Namespace) -> PlanQuery:
     if args.forward_only:
         options["allow_reverse"] = False
     (x0, y0, yaw0), (x1, y1, yaw1) = args.start, args.goal
-    return PlanQuery((x0, y0, yaw0), (x1, y1, yaw1), PlannerOptions.from_dict(options), args.time_limit)
+    start, goal = (x0, y0, angle(args, yaw0)), (x1, y1, angle(args, yaw1))
+    return PlanQuery(start, goal, PlannerOptions.from_dict(options), args.time_limit)
 
 
 def _pose(p: tuple[float, float, float]) -> dict[str, float]:
@@ -73,27 +79,42 @@ def _pose(p: tuple[float, float, float]) -> dict[str, float]:
 
 
 def run(args: argparse.Namespace) -> int:
-    robot = load_robot(args.robot)
-    query = _query(args)  # before the map is read
-    check_output(args.out, "--out")
-    if args.plot:
-        check_output(args.plot, "--plot", plot_formats())
-    grid = read_map_arg(args.map, args.map_topic, robot)
-    try:
-        result = execute_plan(query, grid, robot)
-    except PlanningError as exc:  # the failed result is printed too; the exit code is the error's (service.outcome)
-        emit_result(failure_json(exc.code, exc.msg, robot, exc.planning_time_s, exc.expansions), args.out,
-                    lambda out: write_plan_mcap(
-                        out, {"start": _pose(query.start), "goal": _pose(query.goal), "robot": robot.to_json()}, grid))
+    from planner.hybrid_astar.plot import plot_plan
+    from planner.result import failure_json
+    from planner.robot import load_robot
+    from service.pipeline import execute_plan
+    from service.ros import write_plan_mcap
+
+    with Stages("plan", ["load the robot and the map", "plan", *(["plot"] if args.plot else [])]) as stages:
+        stages.start("load the robot and the map")
+        robot = load_robot(args.robot)
+        query = _query(args)  # before the map is read
+        check_output(args.out, "--out")
         if args.plot:
-            title = f"{grid.name}: no path ({exc.code})"
+            check_output(args.plot, "--plot", plot_formats())
+        grid = read_map_arg(args.map, args.map_topic, robot)
+        stages.start("plan")
+        try:
+            result = execute_plan(query, grid, robot)
+        except PlanningError as exc:  # the failed result is printed too; the exit code is the error's (outcome)
+            emit_result(failure_json(exc.code, exc.msg, robot, exc.planning_time_s, exc.expansions), args.out,
+                        lambda out: write_plan_mcap(
+                            out, {"start": _pose(query.start), "goal": _pose(query.goal), "robot": robot.to_json()},
+                            grid))
+            if args.plot:
+                stages.start("plot")
+                title = f"{grid.name}: no path ({exc.code})"
+                write_file(args.plot, "--plot",
+                           lambda: plot_plan(grid, robot, None, query.start, query.goal, args.plot, title=title))
+            raise
+        body = result.to_json()
+        emit_result(body, args.out, lambda out: write_plan_mcap(out, body, grid))
+        if args.plot:
+            stages.start("plot")
+            title = f"{grid.name}: {robot.name}, {result.length_m:.2f} m in {result.planning_time_s * 1000:.0f} ms"
             write_file(args.plot, "--plot",
-                       lambda: plot_plan(grid, robot, None, query.start, query.goal, args.plot, title=title))
-        raise
-    body = result.to_json()
-    emit_result(body, args.out, lambda out: write_plan_mcap(out, body, grid))
-    if args.plot:
-        title = f"{grid.name}: {robot.name}, {result.length_m:.2f} m in {result.planning_time_s * 1000:.0f} ms"
-        write_file(args.plot, "--plot",
-                   lambda: plot_plan(grid, robot, result.states, query.start, query.goal, args.plot, title=title))
+                       lambda: plot_plan(grid, robot, result.states, query.start, query.goal, args.plot, title=title))
+    if args.out:  # stdout is free: say where the result went (the README promised output)
+        say("plan", f"{result.length_m:.2f} m in {result.planning_time_s * 1000:.0f} ms, "
+                    f"wrote {args.out}{' and ' + args.plot if args.plot else ''}")
     return EXIT_OK

@@ -12,11 +12,8 @@ import argparse
 import sys
 from typing import Any
 
-import numpy as np
-
 from planner.errors import InvalidInput
-from service.cli._io import emit_result, is_bag, positive_float, read_bag_map, read_json_file
-from service.ros import write_simulation_mcap
+from service.cli._io import Stages, emit_result, is_bag, positive_float, read_bag_map, read_json_file, say
 
 VERB = "simulate"
 HELP = "roll a plan in closed loop (paper 001 MPC + odometry/GNSS fusion) and report tracking metrics"
@@ -101,6 +98,8 @@ def _bench() -> int:
 def run(args: argparse.Namespace) -> int:
     if args.bench:
         return _bench()
+    import numpy as np
+
     from planner.closed_loop.simulate import SimulationOptions, simulate_plan
     from planner.closed_loop.tracker import MPCParams
     from planner.occupancy import OccupancyGrid
@@ -144,18 +143,28 @@ def run(args: argparse.Namespace) -> int:
         mpc=MPCParams(horizon=args.horizon),
         time_limit_s=args.time_limit,
     )
-    result = simulate_plan(grid, plan, robot, seed=args.seed, noise=args.noise, options=options)
-    if args.plot:
-        from planner.closed_loop.plot import plot_simulation
+    with Stages("simulate", ["simulate", *(["plot"] if args.plot else [])]) as stages:
+        stages.start("simulate")
+        result = simulate_plan(grid, plan, robot, seed=args.seed, noise=args.noise, options=options)
+        if args.plot:
+            stages.start("plot")
+            from planner.closed_loop.plot import plot_simulation
 
-        plot_simulation(grid, plan, result, args.plot)
+            plot_simulation(grid, plan, result, args.plot)
+    from service.ros import write_simulation_mcap
+
     emit_result(result, args.out, lambda out: write_simulation_mcap(out, plan, result, grid))
     m = result["metrics"]
     if args.out:
-        sys.stderr.write(
-            f"cross-track rms {m['cross_track_rms_m']:.3f} m, max {m['cross_track_max_m']:.3f} m; final "
-            f"error {m['final_position_error_m']:.3f} m; clearance {m['min_clearance_m']:.3f} m; "
+        verdict = "reached the goal" if m["reached_goal"] else "did NOT reach the goal"
+        if m["stopped_at_estimated_goal"] and not m["reached_goal"]:
+            verdict += " (it stopped where its estimate put the goal)"
+        say(
+            "simulate",
+            f"{verdict}: true end {m['final_position_error_m']:.3f} m from the path's end, estimate "
+            f"{m['estimate_error_final_m']:.3f} m off the truth; cross-track rms {m['cross_track_rms_m']:.3f} m, "
+            f"max {m['cross_track_max_m']:.3f} m; clearance {m['min_clearance_m']:.3f} m; "
             f"fallback steps {m['fallback_steps']}; fused error max {m['estimate_error_max_m']:.3f} m vs "
-            f"odometry {m['odometry_error_max_m']:.3f} m\n"
+            f"odometry {m['odometry_error_max_m']:.3f} m",
         )
     return 0

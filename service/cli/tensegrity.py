@@ -6,11 +6,7 @@ import argparse
 import math
 
 from planner.errors import InvalidInput
-from planner.robot import load_robot
-from planner.tensegrity import form_find, plan_gait, static_equilibria
-from planner.tensegrity.geometry import params_from_profile
-from planner.tensegrity.plot import plot_gait
-from service.cli._io import emit_json, finite_float
+from service.cli._io import Stages, add_degrees_flag, angle, emit_json, finite_float
 
 VERB = "tensegrity"
 HELP = "two-arc tensegrity robot (TeXploR): static states, rolling gaits, form finding"
@@ -26,7 +22,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     static.add_argument(
         "--theta2", type=finite_float, required=True, help="slider 2 angle (rad, or deg with --degrees)"
     )
-    static.add_argument("--degrees", action="store_true", help="θ1, θ2 are in degrees")
+    add_degrees_flag(static)
     static.add_argument("--no-verify", action="store_true", help="skip the potential-energy cross-check")
     static.add_argument("--robot", default="texplor", help="profile name or TOML path (default texplor)")
     static.add_argument("--out", help="write the JSON here instead of stdout")
@@ -35,7 +31,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     gait.add_argument("--distance", type=finite_float, required=True, help="metres; negative = reverse gait")
     gait.add_argument("--steps", type=int, default=32, help="samples per state leg (default 32)")
     gait.add_argument("--start-state", type=int, default=1, help="hybrid state at the start (1-4, default 1)")
-    gait.add_argument("--corner", type=finite_float, help="slider path corner θ1 in degrees (default 45)")
+    gait.add_argument(
+        "--corner", type=finite_float, help="slider path corner θ1 (rad, or deg with --degrees; default 45°)"
+    )
+    add_degrees_flag(gait)
     gait.add_argument(
         "--measure",
         choices=("net", "rolled"),
@@ -64,25 +63,39 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _run_static(args: argparse.Namespace) -> int:
-    to_rad = math.radians if args.degrees else float
+    from planner.robot import load_robot
+    from planner.tensegrity import static_equilibria
+
     result = static_equilibria(
-        to_rad(args.theta1), to_rad(args.theta2), load_robot(args.robot), not args.no_verify
+        angle(args, args.theta1), angle(args, args.theta2), load_robot(args.robot), not args.no_verify
     )
     emit_json(result, args.out)
     return 0
 
 
 def _run_gait(args: argparse.Namespace) -> int:
-    profile = load_robot(args.robot)
-    result = plan_gait(args.distance, profile, args.steps, args.start_state, args.corner, args.measure)
-    if args.plot:
-        plot_gait(result, params_from_profile(profile), args.plot)
+    from planner.robot import load_robot
+    from planner.tensegrity import plan_gait
+    from planner.tensegrity.geometry import params_from_profile
+    from planner.tensegrity.plot import plot_gait
+
     if not args.out:
         raise InvalidInput("out", "the gait JSON is long; give --out FILE.json")
+    corner_deg = None if args.corner is None else math.degrees(angle(args, args.corner))
+    with Stages("tensegrity gait", ["plan the gait", *(["plot"] if args.plot else [])]) as stages:
+        stages.start("plan the gait")
+        profile = load_robot(args.robot)
+        result = plan_gait(args.distance, profile, args.steps, args.start_state, corner_deg, args.measure)
+        if args.plot:
+            stages.start("plot")
+            plot_gait(result, params_from_profile(profile), args.plot)
     emit_json(result, args.out)
     return 0
 
 
 def _run_formfind(args: argparse.Namespace) -> int:
+    from planner.robot import load_robot
+    from planner.tensegrity import form_find
+
     emit_json(form_find(load_robot(args.robot), args.fix_centre, args.starts, args.seed), args.out)
     return 0

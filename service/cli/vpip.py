@@ -4,30 +4,39 @@ from __future__ import annotations
 
 import argparse
 import math
+import sys
 from pathlib import Path
 from typing import Any
 
 from planner.errors import InvalidInput
-from planner.robot import load_robot
-from planner.vpip import api
-from planner.vpip.cascade import PLANTS
-from service.cli._io import emit_json, finite_float, is_mcap_out, positive_float, read_json_file
+from service.cli._io import (
+    Stages,
+    add_degrees_flag,
+    angle,
+    emit_json,
+    finite_float,
+    is_mcap_out,
+    positive_float,
+    read_json_file,
+)
+from service.outcome import EXIT_NO_SOLUTION
+
+#: planner.vpip.cascade.PLANTS, repeated so that --help does not import the planner (a test keeps them equal)
+PLANTS = ("surrogate", "mujoco")
 
 VERB = "vpip"
 HELP = "VPIP rod driver for rod-driven spheres (daedalus): rods, radius, roll, calibrate, schedule, circle"
 
 
-def _angle(args: argparse.Namespace, value: float) -> float:
-    return math.radians(value) if args.degrees else value
-
-
 def _rods(args: argparse.Namespace) -> int:
+    from planner.vpip import api
+
     emit_json(
         api.rods_report(
-            _angle(args, args.phi_vpip),
-            _angle(args, args.theta_vpip),
-            _angle(args, args.roll),
-            _angle(args, args.pitch_phase),
+            angle(args, args.phi_vpip),
+            angle(args, args.theta_vpip),
+            angle(args, args.roll),
+            angle(args, args.pitch_phase),
             args.robot,
         ),
         None,
@@ -36,11 +45,15 @@ def _rods(args: argparse.Namespace) -> int:
 
 
 def _radius(args: argparse.Namespace) -> int:
-    emit_json(api.radius_report(_angle(args, args.roll), args.robot), None)
+    from planner.vpip import api
+
+    emit_json(api.radius_report(angle(args, args.roll), args.robot), None)
     return 0
 
 
 def _roll(args: argparse.Namespace) -> int:
+    from planner.vpip import api
+
     emit_json(api.roll_report(args.radius, args.robot, left=not args.right), None)
     return 0
 
@@ -63,6 +76,9 @@ def _rolls(text: str) -> list[float]:
 
 
 def _calibrate(args: argparse.Namespace) -> int:
+    from planner.robot import load_robot
+    from planner.vpip import api
+
     profile = load_robot(args.robot)
     sources = sum(x is not None for x in (args.runs, args.circles, args.rolls))
     if sources != 1:
@@ -83,6 +99,8 @@ def _calibrate(args: argparse.Namespace) -> int:
 
 
 def _circle(args: argparse.Namespace) -> int:
+    from planner.vpip import api
+
     if not 0 < args.duration <= 600:
         raise InvalidInput("duration", f"must be in (0, 600] s, got {args.duration}")
     theta = None if args.theta_deg is None else math.radians(args.theta_deg)
@@ -99,21 +117,32 @@ def _circle(args: argparse.Namespace) -> int:
 
 
 def _schedule(args: argparse.Namespace) -> int:
+    from planner.vpip import api
+
     plan: Any = read_json_file(args.path, "path")
-    result = api.schedule_report(plan, args.robot, args.driver, args.plant)
-    if is_mcap_out(args.out):
-        from service.ros import write_schedule_mcap
+    with Stages("vpip schedule", ["schedule", *(["plot"] if args.plot else [])]) as stages:
+        stages.start("schedule")
+        result = api.schedule_report(plan, args.robot, args.driver, args.plant)
+        if is_mcap_out(args.out):
+            from service.ros import write_schedule_mcap
 
-        write_schedule_mcap(args.out, plan, result)
-    else:
-        emit_json(result, args.out)
-    if args.plot:
-        from planner.vpip.plot import plot_schedule
+            write_schedule_mcap(args.out, plan, result)
+        else:
+            emit_json(result, args.out)
+        if args.plot:
+            stages.start("plot")
+            from planner.vpip.plot import plot_schedule
 
-        plot_schedule(result, args.plot, plan)
-    emit_json(
-        {"out": str(args.out), "plot": args.plot, "driver": result["driver"], **result["summary"]}, None
-    )
+            plot_schedule(result, args.plot, plan)
+    summary = result["summary"]
+    emit_json({"out": str(args.out), "plot": args.plot, "driver": result["driver"], **summary}, None)
+    if not summary["reached_end"]:  # the files are written for a look; the exit code says it failed
+        sys.stderr.write(
+            f"sphereplan vpip schedule: {result['robot']} did not reach the end of the path: stopped after "
+            f"{summary['duration_s']:.1f} s (the plan takes {summary['plan_duration_s']:.1f} s), "
+            f"{summary['final_position_error_m']:.2f} m from its end\n"
+        )
+        return EXIT_NO_SOLUTION
     return 0
 
 
@@ -132,13 +161,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     rods.add_argument("--roll", type=finite_float, default=0.0, help="robot roll, > 0 leans left (default 0)")
     rods.add_argument("--pitch-phase", type=finite_float, default=0.0, help="how far the sphere has rolled")
-    rods.add_argument("--degrees", action="store_true", help="input angles in degrees (output stays radians)")
+    add_degrees_flag(rods)
     common(rods)
     rods.set_defaults(func=_rods)
 
     radius = sub.add_parser("radius", help="turning radius held at a roll angle (profile roll model)")
     radius.add_argument("--roll", type=finite_float, required=True, help="roll (rad; --degrees for degrees)")
-    radius.add_argument("--degrees", action="store_true")
+    add_degrees_flag(radius)
     common(radius)
     radius.set_defaults(func=_radius)
 
@@ -173,7 +202,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     sched.add_argument(
         "--plant", choices=PLANTS, default="surrogate", help="surrogate (fast, default) or mujoco (rod physics)"
     )
-    common(sched, None)
+    common(sched)
     sched.set_defaults(func=_schedule)
 
     circ = sub.add_parser("circle", help="hold a roll (and omega) on a plant and fit the circle rolled (paper §5)")

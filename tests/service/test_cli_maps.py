@@ -21,7 +21,7 @@ def run_json(argv: list[str], capsys: pytest.CaptureFixture[str]) -> tuple[int, 
 
 
 def test_lists_shipped_maps_and_problems(capsys: pytest.CaptureFixture[str]) -> None:
-    code, result = run_json(["maps"], capsys)
+    code, result = run_json(["maps", "--json"], capsys)
     assert code == 0
     maps = {m["file"]: m for m in result["maps"]}
     assert {"garage.yaml", "maze.yaml", "field.yaml", "bench20.yaml", "cave.yaml", "cave.stl"} <= set(maps)
@@ -44,9 +44,9 @@ def test_env_var_and_option_choose_the_folder(
     shutil.copy(MAPS / "maze.pgm", tmp_path)
     monkeypatch.setenv("SPHEREPLAN_MAPS", str(tmp_path))
     assert default_maps_dir() == tmp_path
-    code, result = run_json(["maps"], capsys)
+    code, result = run_json(["maps", "--json"], capsys)
     assert code == 0 and [m["name"] for m in result["maps"]] == ["maze"] and result["problems"] == []
-    code, result = run_json(["maps", "--maps", str(MAPS)], capsys)
+    code, result = run_json(["maps", "--json", "--maps", str(MAPS)], capsys)
     assert code == 0 and len(result["maps"]) >= 6
 
 
@@ -86,5 +86,22 @@ def test_bad_problem_set_names_the_field(
 
 def test_unreadable_map_is_listed_with_an_error(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     (tmp_path / "broken.yaml").write_text("image: missing.pgm\nresolution: 0.1\n")
-    code, result = run_json(["maps", "--maps", str(tmp_path)], capsys)
+    code, result = run_json(["maps", "--json", "--maps", str(tmp_path)], capsys)
     assert code == 0 and "error" in result["maps"][0]
+
+
+def test_maps_prints_a_table_by_default(capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["maps", "--maps", str(MAPS)]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    assert lines[0] == f"maps in {MAPS.resolve()}"
+    assert lines[1].split()[:3] == ["map", "file", "kind"]
+    garage = next(line for line in lines if line.startswith("garage "))
+    assert "40 × 30" in garage and "0.05" in garage
+
+
+def test_binary_stl_bounds_read_directly_match_the_mesh_loader() -> None:
+    from planner.maps.catalogue import _binary_stl_bounds
+    from planner.maps.mesh_world import MeshWorld
+
+    lo, hi = _binary_stl_bounds(MAPS / "cave.stl")
+    assert [lo.tolist(), hi.tolist()] == MeshWorld.from_file(MAPS / "cave.stl").mesh.bounds.tolist()

@@ -320,6 +320,9 @@ def test_full_pool_gives_503_and_recovers(client: httpx.Client, server: Server) 
 
 # per operation and mode: bounded so the suite stays quick (raise it for a deeper run)
 FUZZ_EXAMPLES = int(os.environ.get("SPHEREPLAN_FUZZ_EXAMPLES", "12"))
+# per request: schemathesis's default (10 s) is a latency check in disguise, and a shared CI box can be 5x
+# slower than an idle one; what this test checks is the answer (no 5xx, documented shape), not the speed
+FUZZ_REQUEST_TIMEOUT_S = float(os.environ.get("SPHEREPLAN_FUZZ_TIMEOUT_S", "120"))
 
 
 @pytest.mark.parametrize("mode", [GenerationMode.POSITIVE, GenerationMode.NEGATIVE])
@@ -338,6 +341,6 @@ def test_openapi_fuzz_finds_no_server_error(server: Server, mode: GenerationMode
         def check(case: Any) -> None:
             # a generous timeout: a valid tensegrity/static takes ~12 s on a loaded 2-core machine
             case.call_and_validate(checks=[not_a_server_error, status_code_conformance, content_type_conformance,
-                                           response_schema_conformance], timeout=120)
+                                           response_schema_conformance], timeout=FUZZ_REQUEST_TIMEOUT_S)
 
         check()

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 
 from planner.closed_loop.simulate import SimulationOptions, bench_mpc, simulate_plan
@@ -50,3 +52,16 @@ def test_bench_rows() -> None:
     rows = bench_mpc(horizons=(8,), steps=20)
     assert len(rows) == 1 and rows[0]["horizon"] == 8 and rows[0]["steps"] >= 20
     assert 0 < rows[0]["p50_ms"] <= rows[0]["p95_ms"]
+
+
+def test_reached_goal_is_decided_by_the_true_position_not_the_estimate() -> None:
+    """The robot stops where its estimate says the goal is; reached_goal also needs the truth there."""
+    from planner.synthetic_paths import straight_plan
+
+    plan = straight_plan(ROBOT, 2.0, (5.0, 5.0, 0.0))
+    normal = simulate_plan(FIELD, plan, ROBOT, seed=3, noise="default", options=PURSUIT)["metrics"]
+    assert normal["stopped_at_estimated_goal"] and normal["reached_goal"]
+    assert normal["final_position_error_m"] <= PURSUIT.arrival_tolerance_m
+    strict = replace(PURSUIT, arrival_tolerance_m=normal["final_position_error_m"] / 2)
+    m = simulate_plan(FIELD, plan, ROBOT, seed=3, noise="default", options=strict)["metrics"]
+    assert m["stopped_at_estimated_goal"] and not m["reached_goal"]
