@@ -213,7 +213,10 @@ def test_reconfiguration_mcap_holds_the_sphere_pose(tmp_path, capsys):
     assert len(msgs["/reconfigure/path"][0][2].poses) == len(rec["samples"])
 
 
-def test_vpip_schedule_mcap_holds_rod_lengths(plan_json, tmp_path, capsys):
+def test_vpip_schedule_mcap_holds_rod_lengths(tmp_path, capsys):
+    plan_json = tmp_path / "plan.json"  # planned for daedalus, so that its rods can roll it to the end
+    assert main(["plan", "--map", GARAGE, "--start", "3.5", "8.05", "0", "--goal", "8", "8.05", "0",
+                 "--robot", "daedalus", "--out", str(plan_json)]) == 0
     out, js = tmp_path / "sched.mcap", tmp_path / "sched.json"
     assert run(capsys, "vpip", "schedule", "--path", str(plan_json), "--robot", "daedalus", "--out", str(js))[0] == 0
     code, _, _ = run(capsys, "vpip", "schedule", "--path", str(plan_json), "--robot", "daedalus", "--out", str(out))
