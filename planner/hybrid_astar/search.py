@@ -74,6 +74,7 @@ class PlannerOptions:
     n_roll_bins: int = 3              # closed-set roll bins (left/upright/right; 0 = one per held roll)
     step_m: float = 0.0               # arc length per expansion; 0 = automatic (see ``resolved_step``)
     allow_reverse: bool | None = None  # None = the robot's own ``reversible`` (true for the spheres)
+    dead_end_check: bool = True       # after GOAL_CHECK_AFTER expansions, prove dead-end goals by a reverse search
     n_circles: int = 3                # covering circles of the footprint (paper 001 Fig. 6)
     allow_unknown: bool = False
     goal_tolerance_m: float = 0.1
@@ -423,7 +424,7 @@ class HybridAStar:
                     f"no valid path: the search exhausted every state reachable from the start "
                     f"({run.expansions} expansions)", planning_time_s=time.perf_counter() - t0,
                     expansions=run.expansions)
-            if not checked_goal and run.expansions >= GOAL_CHECK_AFTER:
+            if o.dead_end_check and not checked_goal and run.expansions >= GOAL_CHECK_AFTER:
                 # 5b. Fail fast: a bounded search of the reverse problem (from the goal, every motion run
                 # backwards) that exhausts proves the goal pose cannot be approached at all.
                 checked_goal = True

@@ -60,7 +60,7 @@ def test_ctrl_c_stops_the_server_while_a_plan_runs(tmp_path: Path) -> None:
                 pass
             assert proc.poll() is None, proc.stderr.read() if proc.stderr else ""
             time.sleep(0.2)
-        slow = harness.plan_body(goal=harness.SLOT_GOAL, time_limit_s=60.0)
+        slow = harness.plan_body(goal=harness.SLOT_GOAL, options=harness.SLOW, time_limit_s=60.0)
         thread = threading.Thread(target=lambda: _post_ignoring_errors(url, slow), daemon=True)
         thread.start()
         while httpx.get(url + "/healthz", timeout=5).json()["in_flight"] == 0:

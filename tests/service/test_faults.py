@@ -59,7 +59,7 @@ def pool_of(service: PlanningService) -> SupervisedPool:
 
 def slot_plan(service: PlanningService, time_limit_s: float) -> Future[Outcome]:
     """A plan that searches until its time limit (the goal is unreachable for a sphere)."""
-    return service.submit_plan(PlanRequest.model_validate(plan_body(goal=harness.SLOT_GOAL,
+    return service.submit_plan(PlanRequest.model_validate(plan_body(goal=harness.SLOT_GOAL, options=harness.SLOW,
                                                                     time_limit_s=time_limit_s)))
 
 

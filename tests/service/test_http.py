@@ -31,6 +31,7 @@ from tests.service.service_harness import (
     HALL_GOAL,
     HALL_START,
     SLOT_GOAL,
+    SLOW,
     Server,
     plan_body,
     strip_sim_timing,
@@ -301,7 +302,7 @@ def test_twenty_concurrent_plans_while_healthz_answers(server: Server) -> None:
 
 
 def test_full_pool_gives_503_and_recovers(client: httpx.Client, server: Server) -> None:
-    slow = plan_body(goal=SLOT_GOAL, time_limit_s=0.3)  # times out: holds a job for 0.3 s
+    slow = plan_body(goal=SLOT_GOAL, options=SLOW, time_limit_s=0.3)  # times out: holds a job for 0.3 s
 
     async def burst() -> list[httpx.Response]:
         async with httpx.AsyncClient(base_url=server.url, timeout=120) as c:

@@ -17,7 +17,7 @@ import httpx
 import pytest
 
 from tests.service import service_harness as harness
-from tests.service.service_harness import SLOT_GOAL, Server, plan_body
+from tests.service.service_harness import SLOT_GOAL, SLOW, Server, plan_body
 
 pytestmark = pytest.mark.faults
 
@@ -86,7 +86,7 @@ def test_a_continent_sized_inline_grid_is_refused(client: httpx.Client) -> None:
 
 
 def test_clients_that_give_up_free_their_slots(client: httpx.Client, server: Server) -> None:
-    slow = plan_body(goal=SLOT_GOAL, time_limit_s=3.0)
+    slow = plan_body(goal=SLOT_GOAL, options=SLOW, time_limit_s=3.0)
 
     async def give_up() -> int:
         async with httpx.AsyncClient(base_url=server.url, timeout=0.5) as c:
@@ -136,7 +136,7 @@ def test_sigterm_answers_requests_in_flight_with_json_503(tmp_path: Path) -> Non
     try:
         async def run() -> list[httpx.Response]:
             async with httpx.AsyncClient(base_url=url, timeout=WAIT_S) as c:
-                slow = plan_body(goal=SLOT_GOAL, time_limit_s=15.0)
+                slow = plan_body(goal=SLOT_GOAL, options=SLOW, time_limit_s=15.0)
                 posts = [asyncio.create_task(c.post("/v1/plan", json=slow)) for _ in range(2)]
                 while (await c.get("/healthz")).json()["in_flight"] < 2:
                     await asyncio.sleep(0.05)

@@ -166,8 +166,8 @@ def test_plan_in_a_thread_pool_matches_the_planner(maps_dir: Path) -> None:
     service.start()
     try:
         outcome = service.plan(PlanRequest.model_validate(plan_body()), timeout_s=60)
-        slot = service.plan(PlanRequest.model_validate(plan_body(goal=harness.SLOT_GOAL, time_limit_s=0.2)),
-                            timeout_s=60)
+        slow = plan_body(goal=harness.SLOT_GOAL, options=harness.SLOW, time_limit_s=0.2)
+        slot = service.plan(PlanRequest.model_validate(slow), timeout_s=60)
     finally:
         service.close()
     assert outcome.ok, outcome.body
