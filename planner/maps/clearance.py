@@ -254,6 +254,14 @@ def _segment_meets_box(x0: float, y0: float, x1: float, y1: float,
 
 
 @njit(cache=True)
+def _placed(x: float, y: float, yaw: float, px: np.ndarray, py: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """World coordinates of the body-frame polygon (px, py) at pose (x, y, yaw)."""
+    c = math.cos(yaw)
+    s = math.sin(yaw)
+    return x + c * px - s * py, y + s * px + c * py
+
+
+@njit(cache=True)
 def polygon_hits(
     blocked: np.ndarray, ox: float, oy: float, res: float, x: float, y: float, yaw: float,
     px: np.ndarray, py: np.ndarray,
@@ -263,14 +271,8 @@ def polygon_hits(
     Exact for square cells: a blocked cell meets the polygon when its centre is inside it or one of its
     edges crosses the cell. ``blocked`` is the (height, width) boolean grid.
     """
-    c = math.cos(yaw)
-    s = math.sin(yaw)
+    wx, wy = _placed(x, y, yaw, px, py)
     n = px.size
-    wx = np.empty(n)
-    wy = np.empty(n)
-    for i in range(n):
-        wx[i] = x + c * px[i] - s * py[i]
-        wy[i] = y + s * px[i] + c * py[i]
     h, w = blocked.shape
     ix0 = int(math.floor((wx.min() - ox) / res))
     ix1 = int(math.floor((wx.max() - ox) / res))
@@ -343,14 +345,8 @@ def polygon_distance(
     corners to each polygon edge."""
     if polygon_hits(blocked, ox, oy, res, x, y, yaw, px, py):
         return 0.0
-    c = math.cos(yaw)
-    s = math.sin(yaw)
+    wx, wy = _placed(x, y, yaw, px, py)
     n = px.size
-    wx = np.empty(n)
-    wy = np.empty(n)
-    for i in range(n):
-        wx[i] = x + c * px[i] - s * py[i]
-        wy[i] = y + s * px[i] + c * py[i]
     h, w = blocked.shape
     best = reach_m
     for i in range(n):  # the map's edge
