@@ -11,7 +11,9 @@ single-loop gains found none that settled within the run (docs/pendulum.md). The
 the usual double-loop PID of pendulum-driven spheres, for both loops:
 
 * outer PID: error of the controlled variable (v_ref − ẋ_c, or φ_d − φ) → pendulum angle set-point
-  (α_ref or β_ref), clipped to the pendulum bound of paper 001 §5.1 (15°); derivative on the
+  (α_ref or β_ref), clipped to the envelope its model-based rival lives in: for speed the 15° pitch
+  bound of paper 001 §5.1 that the LMPC keeps; for roll, which the RSLQR does not bound, the largest
+  pendulum angle the auxiliary motor can hold against gravity, asin(τ_max / m_p g l); derivative on the
   measurement, low-pass filtered (``derivative_filter_s``); conditional-integration anti-windup (the
   integral is frozen while the set-point is clipped and the error would push it further); optionally
   (``integral_band``) the integral only runs while |error| is within the band — the integrator gating
@@ -34,6 +36,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 
 from planner.errors import InvalidInput, RobotProfileError
+from planner.pendulum.dynamics import PendulumParams
 from planner.robot import RobotProfile
 
 
@@ -138,6 +141,13 @@ def _gains(section: Mapping[str, object], loop: str) -> PIDGains:
     )
 
 
+def setpoint_limit(params: PendulumParams, loop: str) -> float:
+    """The pendulum set-point clip of the ``speed`` or ``roll`` PID (see the module docstring)."""
+    if loop == "speed":
+        return params.max_pendulum_angle_rad
+    return math.asin(min(1.0, params.max_torque_roll_n_m / params.gravity_torque_n_m))
+
+
 def pid_gains_from_profile(robot: RobotProfile, loop: str) -> PIDGains:
     """The ``speed`` or ``roll`` PID gains of ``robot``'s ``[dynamics.pid]`` table."""
     dyn = robot.extra.get("dynamics")
@@ -147,4 +157,4 @@ def pid_gains_from_profile(robot: RobotProfile, loop: str) -> PIDGains:
     return _gains(pid, loop)
 
 
-__all__ = ["PIDController", "PIDGains", "pid_gains_from_profile"]
+__all__ = ["PIDController", "PIDGains", "pid_gains_from_profile", "setpoint_limit"]

@@ -12,6 +12,7 @@ built; that output is discarded so it never mixes with a command's JSON or table
 from __future__ import annotations
 
 import contextlib
+import io
 import os
 import sys
 from collections.abc import Iterator
@@ -26,19 +27,18 @@ QP_SOLVERS = ("qpoases", "daqp", "osqp")
 
 @contextlib.contextmanager
 def _quiet_stdout() -> Iterator[None]:
-    """Point file descriptor 1 at /dev/null while a C library prints its banner (restored afterwards)."""
-    try:
-        fd_out = sys.stdout.fileno()
-    except (AttributeError, OSError, ValueError):  # a captured stream without a descriptor
-        fd_out = 1
+    """Silence stdout while a solver prints its banner: CasADi forwards C++ output to Python's
+    ``sys.stdout`` (caught by ``redirect_stdout``), anything written to descriptor 1 directly goes to
+    /dev/null; both are restored afterwards."""
     sys.stdout.flush()
-    saved = os.dup(fd_out)
+    saved = os.dup(1)
     null = os.open(os.devnull, os.O_WRONLY)
     try:
-        os.dup2(null, fd_out)
-        yield
+        os.dup2(null, 1)
+        with contextlib.redirect_stdout(io.StringIO()):
+            yield
     finally:
-        os.dup2(saved, fd_out)
+        os.dup2(saved, 1)
         os.close(saved)
         os.close(null)
 
@@ -66,7 +66,7 @@ class DenseQP:
         if solver == "qpoases":
             opts.update({"printLevel": "none", "sparse": False})
         elif solver == "osqp":
-            opts.update({"osqp": {"verbose": False, "eps_abs": 1e-9, "eps_rel": 1e-9, "polish": True}})
+            opts.update({"osqp": {"verbose": False, "eps_abs": 1e-6, "eps_rel": 1e-6, "polish": True}})
         a_sp = ca.Sparsity.dense(self.m, self.n) if self.m else ca.Sparsity(0, self.n)
         with _quiet_stdout():
             self._qp = ca.conic("lmpc_qp", solver, {"h": ca.Sparsity.dense(self.n, self.n), "a": a_sp}, opts)

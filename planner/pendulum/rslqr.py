@@ -45,8 +45,8 @@ class RSLQRSettings:
     """Weights of eq. 26 on (∫e, β, β̇, φ − φ_d, φ̇) and on τ_r (per N m²); which compensations to use."""
 
     ts_s: float = 0.02
-    q: tuple[float, float, float, float, float] = (20.0, 1.0, 0.5, 1600.0, 200.0)
-    r: float = 0.05
+    q: tuple[float, float, float, float, float] = (20.0, 1.0, 0.5, 6400.0, 200.0)
+    r: float = 0.02
     state_compensation: bool = True
     velocity_feedforward: bool = True
     steady_state_reference: bool = True
