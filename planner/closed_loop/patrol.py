@@ -10,8 +10,10 @@ reports comes from.
 The result is the SIM.json of :func:`~planner.closed_loop.simulate.simulate_plan` plus ``patrol``: per
 goal, the moment the robot *believed* it was closest to the goal, with the true distance to the goal
 then (``true_error_m``: what an observer would measure) and the estimate's own error then
-(``estimate_error_m``: odometry drift) reported separately, and the largest roll rate after each big
-turn.
+(``estimate_error_m``: odometry drift) reported separately, and the shaking after each big turn
+(:func:`turn_overshoots`: how far the roll swings past zero, to the other side, as it returns from a
+turn — paper 001 §6.5: "prone to shaking after a significant turn as a result of the roll angle
+returning to zero").
 """
 
 from __future__ import annotations
@@ -60,6 +62,37 @@ def _join(legs: Sequence[dict[str, Any]]) -> dict[str, Any]:
     return plan
 
 
+def turn_overshoots(
+    t: np.ndarray, roll: np.ndarray, turn_rad: float = 0.15, hold_s: float = 1.0, window_s: float = 3.0
+) -> list[dict[str, float]]:
+    """For every turn (|roll| ≥ ``turn_rad`` for at least ``hold_s``), the roll's largest swing to the
+    other side within ``window_s`` after it first crosses zero again (rad, ≥ 0) and when that happened."""
+    out = []
+    i, n = 0, len(t)
+    while i < n:
+        if abs(roll[i]) < turn_rad:
+            i += 1
+            continue
+        sign = math.copysign(1.0, roll[i])
+        j = i
+        while j < n and sign * roll[j] >= turn_rad:
+            j += 1
+        if t[min(j, n - 1)] - t[i] < hold_s:
+            i = j + 1
+            continue
+        k = j
+        while k < n and sign * roll[k] > 0.0:
+            k += 1
+        if k >= n:
+            break
+        end = int(np.searchsorted(t, t[k] + window_s))
+        swing = float(max(0.0, -sign * roll[k:end].min())) if sign > 0 else float(max(0.0, roll[k:end].max()))
+        out.append({"turn_end_t": float(t[k]), "turn_roll_rad": float(sign * np.abs(roll[i:j]).max()),
+                    "overshoot_rad": swing})
+        i = k
+    return out
+
+
 def patrol(
     grid: OccupancyGrid,
     robot: RobotProfile,
@@ -102,6 +135,8 @@ def patrol(
             "leg": k,
         })
     roll_rate = np.gradient(tr[:, 4], tr[:, 0]) if len(tr) > 2 else np.zeros(len(tr))
+    shakes = turn_overshoots(tr[:, 0], tr[:, 4])
+    sim["noise"] = f"{noise}, GNSS denied"
     sim["patrol"] = {
         "goals": [list(g) for g in goals],
         "gnss": "denied",
@@ -109,9 +144,11 @@ def patrol(
         "true_error_max_m": max(float(r["true_error_m"]) for r in report),
         "estimate_error_final_m": sim["metrics"]["estimate_error_final_m"],
         "roll_rate_max_rad_s": float(np.abs(roll_rate).max()),
+        "turns": shakes,
+        "turn_overshoot_max_rad": max((s["overshoot_rad"] for s in shakes), default=0.0),
     }
     sim["plan"] = {"length_m": plan["length_m"], "legs": len(legs), "states": plan["states"]}
     return sim
 
 
-__all__ = ["GARAGE_PATROL", "patrol"]
+__all__ = ["GARAGE_PATROL", "patrol", "turn_overshoots"]

@@ -74,6 +74,20 @@ def rslqr_gains(
     return k[1:], float(k[0]), p
 
 
+def sampled_spectral_radius(params: PendulumParams, settings: RSLQRSettings) -> float:
+    """Spectral radius of the linear closed loop as it runs: ZOH plant at ``ts_s``, forward-Euler integral,
+    the continuous-time gains. Below 1 = the sampled design is stable (the LQR is designed in continuous
+    time, so very high gains can be stable on paper and unstable at 50 Hz)."""
+    k_x, k_i, _ = rslqr_gains(params, settings)
+    lin = linear_model(params, "roll")
+    ad, bd, _ = lin.discretise(settings.ts_s)
+    cl = np.zeros((5, 5))
+    cl[0, 0], cl[0, 3] = 1.0, settings.ts_s
+    cl[1:, 1:] = ad - np.outer(bd, k_x)
+    cl[1:, 0] = -bd * k_i
+    return float(max(abs(np.linalg.eigvals(cl))))
+
+
 class RSLQRRollController:
     """Eq. 26–32 once per ``ts_s``: :meth:`step` (measured x_r, φ_d, speed v) → τ_r (N m)."""
 
@@ -130,4 +144,4 @@ class RSLQRRollController:
         return max(-self.tau_max, min(self.tau_max, u))
 
 
-__all__ = ["RSLQRRollController", "RSLQRSettings", "rslqr_gains"]
+__all__ = ["RSLQRRollController", "RSLQRSettings", "rslqr_gains", "sampled_spectral_radius"]

@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from planner.closed_loop.patrol import patrol
+from planner.closed_loop.patrol import patrol, turn_overshoots
 from planner.closed_loop.simulate import SimulationOptions, simulate_plan
 from planner.errors import InvalidInput
 from planner.maps.nav2 import save_map
@@ -104,3 +104,15 @@ def test_simulate_cli_model_dynamic(tmp_path: Path) -> None:
     sim = json.loads(out.read_text())
     assert sim["model"] == "dynamic" and sim["metrics"]["pendulum_pitch_max_rad"] > 0
     assert main(["simulate", "--map", map_yaml, "--path", str(plan), "--model", "rigid"]) == 2
+
+
+def test_turn_overshoot_measures_the_swing_past_zero() -> None:
+    t = np.arange(0.0, 10.0, 0.02)
+    roll = np.where(t < 3.0, -0.25, 0.0)
+    after = (t >= 3.0) & (t < 5.0)
+    roll[after] = 0.1 * np.sin(math.pi * (t[after] - 3.0))  # swings to +0.1 past zero, then back
+    turns = turn_overshoots(t, roll)
+    assert len(turns) == 1
+    assert turns[0]["turn_roll_rad"] == pytest.approx(-0.25)
+    assert turns[0]["overshoot_rad"] == pytest.approx(0.1, abs=1e-3)
+    assert turn_overshoots(t, np.where(t < 0.5, 0.25, 0.0)) == []  # too short to be a turn

@@ -13,7 +13,7 @@ from planner.pendulum.dynamics import G, PendulumSpherePlant, linear_model, para
 from planner.pendulum.lmpc import LMPCSettings, LMPCSpeedController
 from planner.pendulum.pid import PIDController, PIDGains
 from planner.pendulum.qp import DenseQP
-from planner.pendulum.rslqr import RSLQRRollController, RSLQRSettings, rslqr_gains
+from planner.pendulum.rslqr import RSLQRRollController, RSLQRSettings, rslqr_gains, sampled_spectral_radius
 from planner.robot import load_robot
 
 PARAMS = params_from_profile(load_robot("zju-60"))
@@ -126,7 +126,11 @@ def test_rslqr_gains_solve_the_riccati_equation_and_stabilise_the_50hz_loop() ->
     cl[0, 0], cl[0, 3] = 1.0, 0.02
     cl[1:, 1:] = ad - np.outer(bd, k_x)
     cl[1:, 0] = -bd * k_i
-    assert max(abs(np.linalg.eigvals(cl))) < 1.0
+    radius = max(abs(np.linalg.eigvals(cl)))
+    assert radius < 1.0
+    assert sampled_spectral_radius(PARAMS, st) == pytest.approx(radius)
+    # weights that are stable on paper but not at 50 Hz are recognised
+    assert sampled_spectral_radius(PARAMS, RSLQRSettings(q=(838.7, 401.4, 41.8, 153300.0, 117.5))) > 1.0
 
 
 def test_state_compensation_cancels_the_dropped_centripetal_term() -> None:
