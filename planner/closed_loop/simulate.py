@@ -7,6 +7,11 @@ command from the *estimate*, and the simulator (eq. 1 with actuator limits) move
 result is the SIM.json object: ``trajectory`` (true states), ``estimate`` (fused), ``odometry``
 (odometry alone), ``gnss`` fixes, ``commands`` and ``metrics``. Disturbances come from one seeded
 generator, so the same inputs and seed give the same result. :func:`bench_mpc` times the MPC step.
+
+``SimulationOptions(model="dynamic")`` replaces the kinematic simulator by paper 001's dynamic sphere
+(:class:`planner.pendulum.sphere.DynamicSphere`: the eq. 16–19 plant under the LMPC speed and RSLQR roll
+controllers of eq. 20–32), so the eq. 15 commands go through the motion controllers and the pendulum
+before they move the robot; the profile needs a ``[dynamics]`` table.
 """
 
 from __future__ import annotations
@@ -40,14 +45,17 @@ from planner.robot import RobotProfile, load_robot
 class SimulationOptions:
     """Closed-loop settings, checked when they are made (:class:`InvalidInput` naming the field).
     ``tracker`` is ``"mpc"`` (eq. 15) or ``"pursuit"`` (the geometric tracker alone, fast; used for long
-    localisation runs). ``time_limit_s`` None = 2 × the path's rolling time at cruise speed + 20 s.
-    ``goal_tolerance_m``: a segment is done when its end is this close along the end heading (as the
-    robot believes: on its estimate). ``arrival_tolerance_m``: ``reached_goal`` needs the TRUE centre to
-    end this close to the path's end as well (the estimate can be metres off without GNSS)."""
+    localisation runs). ``model`` is ``"kinematic"`` (eq. 1 with a roll lag, fast) or ``"dynamic"`` (the
+    pendulum plant under LMPC + RSLQR, paper 001 §5). ``time_limit_s`` None = 2 × the path's rolling time
+    at cruise speed + 20 s. ``goal_tolerance_m``: a segment is done when its end is this close along the
+    end heading (as the robot believes: on its estimate). ``arrival_tolerance_m``: ``reached_goal`` needs
+    the TRUE centre to end this close to the path's end as well (the estimate can be metres off without
+    GNSS)."""
 
     control_rate_hz: float = 50.0
     substeps: int = 10
     tracker: str = "mpc"
+    model: str = "kinematic"
     mpc: MPCParams = field(default_factory=MPCParams)
     filter: FilterParams = field(default_factory=FilterParams)
     time_limit_s: float | None = None
@@ -57,6 +65,8 @@ class SimulationOptions:
     def __post_init__(self) -> None:
         if self.tracker not in ("mpc", "pursuit"):
             raise InvalidInput("tracker", f"must be 'mpc' or 'pursuit', got {self.tracker!r}")
+        if self.model not in ("kinematic", "dynamic"):
+            raise InvalidInput("model", f"must be 'kinematic' or 'dynamic', got {self.model!r}")
         if not (self.control_rate_hz > 0 and math.isfinite(self.control_rate_hz)):
             raise InvalidInput("control_rate_hz", "must be a finite number > 0")
 
@@ -124,6 +134,12 @@ def simulate_plan(
     e_xy = rng_init.normal(0.0, dist.init_xy_m, 2) if dist.init_xy_m > 0 else np.zeros(2)
     e_yaw = float(rng_init.normal(0.0, dist.init_yaw_rad)) if dist.init_yaw_rad > 0 else 0.0
     state = SphereState(x0 + e_xy[0], y0 + e_xy[1], yaw0 + e_yaw, roll0, 0.0)
+    dyn = None
+    if opts.model == "dynamic":
+        from planner.pendulum.sphere import DynamicSphere
+
+        dyn = DynamicSphere(rob, dt)
+        dyn.reset(state.x, state.y, state.yaw, state.roll, 0.0)
     odo = WheelOdometry(rob, (x0, y0, yaw0))
     kf = FusionFilter(
         rob,
@@ -208,8 +224,14 @@ def simulate_plan(
         cmd_rows.append((t, cmd.v, cmd.roll))
         # 3. the true sphere moves (eq. 1), with slip
         g = 1.0 - dist.slip_scale + (rng_slip.normal(0.0, dist.slip_noise) if dist.slip_noise > 0 else 0.0)
-        step = sim.step(state, cmd.v, cmd.roll, dt, ground_factor=g)
-        state, wheel_dist = step.state, step.wheel_distance_m
+        if dyn is not None:
+            dstep = dyn.step(state, cmd.v, cmd.roll, dt, ground_factor=g)
+            snap = dstep.state
+            state = SphereState(snap.x, snap.y, snap.yaw, snap.roll, snap.v)
+            wheel_dist = dstep.wheel_distance_m
+        else:
+            step = sim.step(state, cmd.v, cmd.roll, dt, ground_factor=g)
+            state, wheel_dist = step.state, step.wheel_distance_m
         k += 1
 
     tr = np.array(traj)
@@ -245,12 +267,17 @@ def simulate_plan(
         "odometry_error_final_m": float(odo_err[-1]),
         "odometry_yaw_error_final_rad": abs(wrap(float(od[-1, 3] - tr[-1, 3]))),
         "gnss_fixes": len(gnss_rows),
+        "pendulum_pitch_max_rad": dyn.max_pitch_rad if dyn is not None else None,
+        "pendulum_roll_max_rad": dyn.max_pendulum_roll_rad if dyn is not None else None,
+        "lmpc_solve_ms_p50": float(np.percentile(dyn.solve_ms, 50)) if dyn is not None and dyn.solve_ms else None,
+        "lmpc_solve_ms_p95": float(np.percentile(dyn.solve_ms, 95)) if dyn is not None and dyn.solve_ms else None,
     }
     return {
         "robot": rob.to_json(),
         "seed": seed,
         "noise": noise if isinstance(noise, str) else "custom",
         "tracker": opts.tracker,
+        "model": opts.model,
         "control_rate_hz": opts.control_rate_hz,
         "trajectory": _rows(tr, ("t", "x", "y", "yaw", "roll", "v")),
         "estimate": _rows(es, ("t", "x", "y", "yaw")),

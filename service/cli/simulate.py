@@ -1,7 +1,7 @@
 """``sphereplan simulate``: roll a plan in closed loop (simulator + localisation + MPC) and report metrics.
 
 sphereplan simulate --map M.yaml --path PLAN.json [--robot P] [--seed N] [--noise none|default]
-                    [--tracker mpc|pursuit] --out SIM.json [--plot SIM.png]
+                    [--tracker mpc|pursuit] [--model kinematic|dynamic] --out SIM.json [--plot SIM.png]
 sphereplan simulate --track [--map M.yaml] ...     paper 001's 16.2 m × 8.4 m clockwise lap
 sphereplan simulate --bench                        MPC step-time table
 """
@@ -58,6 +58,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         choices=("mpc", "pursuit"),
         default="mpc",
         help="mpc = paper 001 eq. 15 with pure-pursuit fallback; pursuit = geometric only",
+    )
+    parser.add_argument(
+        "--model",
+        choices=("kinematic", "dynamic"),
+        default="kinematic",
+        help="kinematic = eq. 1 with a roll lag (fast); dynamic = paper 001's pendulum plant under LMPC + RSLQR",
     )
     parser.add_argument("--rate", type=positive_float, default=50.0, metavar="HZ", help="control rate (50)")
     parser.add_argument("--horizon", type=_positive_int, default=15, metavar="N", help="MPC horizon (15)")
@@ -140,6 +146,7 @@ def run(args: argparse.Namespace) -> int:
     options = SimulationOptions(
         control_rate_hz=args.rate,
         tracker=args.tracker,
+        model=args.model,
         mpc=MPCParams(horizon=args.horizon),
         time_limit_s=args.time_limit,
     )
