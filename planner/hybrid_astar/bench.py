@@ -80,6 +80,20 @@ def bench_hybrid(problem: Problem, grid: OccupancyGrid, robot: RobotProfile, run
     )
 
 
+
+def bounded_to(space: Any, grid: OccupancyGrid) -> Any:
+    """An OMPL SE(2)-like state space (Dubins, Reeds–Shepp) bounded to the grid's extent."""
+    from ompl import base as ob
+
+    bounds = ob.RealVectorBounds(2)
+    bounds.setLow(0, grid.origin[0])
+    bounds.setLow(1, grid.origin[1])
+    bounds.setHigh(0, grid.origin[0] + grid.size_m[0])
+    bounds.setHigh(1, grid.origin[1] + grid.size_m[1])
+    space.setBounds(bounds)
+    return space
+
+
 def bench_ompl(problem: Problem, grid: OccupancyGrid, robot: RobotProfile, planner_name: str,
                time_s: float) -> BenchRow:
     """One OMPL run: time to the first exact solution, then optimise until ``time_s``; final length."""
@@ -90,13 +104,7 @@ def bench_ompl(problem: Problem, grid: OccupancyGrid, robot: RobotProfile, plann
     ou.setLogLevel(ou.LOG_ERROR)
     footprint = CircleFootprint.for_robot(robot)
     clearance = ClearanceMap(grid)
-    space = ob.DubinsStateSpace(robot.min_turning_radius_m)
-    bounds = ob.RealVectorBounds(2)
-    bounds.setLow(0, grid.origin[0])
-    bounds.setLow(1, grid.origin[1])
-    bounds.setHigh(0, grid.origin[0] + grid.size_m[0])
-    bounds.setHigh(1, grid.origin[1] + grid.size_m[1])
-    space.setBounds(bounds)
+    space = bounded_to(ob.DubinsStateSpace(robot.min_turning_radius_m), grid)
     setup = og.SimpleSetup(space)
 
     def valid(state: Any) -> bool:

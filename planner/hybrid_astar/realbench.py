@@ -40,6 +40,7 @@ from planner.errors import (
     PlanningError,
     StartOccupied,
 )
+from planner.hybrid_astar.bench import bounded_to
 from planner.hybrid_astar.bench_polygon import PolygonChecker
 from planner.hybrid_astar.plan import plan_path, planner_for
 from planner.hybrid_astar.search import PlannerOptions
@@ -354,13 +355,7 @@ def run_reference(problem: RealProblem, grid: OccupancyGrid, robot: RobotProfile
 
     ou.setLogLevel(ou.LOG_ERROR)
     rho = robot.min_turning_radius_m
-    space = ob.DubinsStateSpace(rho) if planner == BIT_DUBINS else ob.ReedsSheppStateSpace(rho)
-    bounds = ob.RealVectorBounds(2)
-    bounds.setLow(0, grid.origin[0])
-    bounds.setLow(1, grid.origin[1])
-    bounds.setHigh(0, grid.origin[0] + grid.size_m[0])
-    bounds.setHigh(1, grid.origin[1] + grid.size_m[1])
-    space.setBounds(bounds)
+    space = bounded_to(ob.DubinsStateSpace(rho) if planner == BIT_DUBINS else ob.ReedsSheppStateSpace(rho), grid)
     setup = og.SimpleSetup(space)
     poly, blocked = checker.polygon, checker.blocked
     ox, oy, res, reach = checker.origin_xy[0], checker.origin_xy[1], checker.resolution_m, checker.circumradius_m
