@@ -24,7 +24,7 @@
 * Pitch bound (added; eq. 23 bounds only the input): |α_i| ≤ α_max (15°, paper 001 §5.1 — "the pendulum
   always swings less than 15°", the premise of the linearisation) on the predicted pitch, softened by
   one slack ε ≥ 0 with an exact penalty (ρ₁ ε + ρ₂ ε²) so the QP stays feasible when a disturbance has
-  already pushed the pendulum past it. Without it the pure eq. 23 LMPC swung the pendulum to 68° on
+  already pushed the pendulum past it. Without it the pure eq. 23 LMPC swung the pendulum to 78° on
   the 1.5 m/s step.
   The terminal weight P is the discrete Riccati solution of the (α, α̇, ẋ_c) system (an assumption; the
   paper names P_p without giving it). The QP goes to qpOASES through CasADi (:class:`BoxQP`).

@@ -26,7 +26,7 @@ Both PIDs measure what the model-based controllers measure (speed, roll, the pen
 obey the same torque limits and run at the same 50 Hz. Gains come from the profile's ``[dynamics.pid]``
 table; they were found by :func:`planner.pendulum.experiments.tune_pid` (``sphereplan controllers
 tune``), which minimises the PID's own summed rise time over every case of its figure
-(docs/pendulum.md, "How the PIDs were tuned").
+(docs/pendulum.md, "The PID baselines and how they were tuned fairly").
 """
 
 from __future__ import annotations

@@ -42,10 +42,13 @@ from planner.pendulum.dynamics import PendulumParams, linear_model
 
 @dataclass(frozen=True)
 class RSLQRSettings:
-    """Weights of eq. 26 on (∫e, β, β̇, φ − φ_d, φ̇) and on τ_r (per N m²); which compensations to use."""
+    """Weights of eq. 26 on (∫e, β, β̇, φ − φ_d, φ̇) and on τ_r (per N m²); which compensations to use.
+
+    The default weights are :func:`planner.pendulum.experiments.tune_rslqr`'s result (the same search,
+    objective and limits as the roll PID's tuning); ``integral_band_rad`` None = no integrator gating."""
 
     ts_s: float = 0.02
-    q: tuple[float, float, float, float, float] = (20.0, 1.0, 0.5, 6400.0, 200.0)
+    q: tuple[float, float, float, float, float] = (1.026, 0.04658, 1.926, 15730.0, 109.2)
     r: float = 0.02
     state_compensation: bool = True
     velocity_feedforward: bool = True

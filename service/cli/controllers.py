@@ -84,8 +84,18 @@ def _figures(args: argparse.Namespace) -> int:
 
 
 def _tune(args: argparse.Namespace) -> int:
-    from planner.pendulum.experiments import tune_pid
+    from planner.pendulum.experiments import tune_pid, tune_rslqr
 
+    if args.controller == "rslqr":
+        if args.loop != "roll":
+            raise InvalidInput("loop", "the RSLQR is the roll controller: use --loop roll")
+        st = tune_rslqr(args.robot)
+        sys.stdout.write(
+            f"# RSLQRSettings.q (on ∫e, β, β̇, φ − φ_d, φ̇; r = {st.settings.r}): objective {st.objective:.3f} s "
+            f"after {st.evaluations} evaluations\nq = {st.settings.q}\n"
+        )
+        emit_json(st.cases, None)
+        return 0
     res = tune_pid(args.robot, args.loop)
     g = res.gains
     band = "" if g.integral_band is None else f", integral_band = {g.integral_band}"
@@ -189,8 +199,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     common(pat)
     pat.set_defaults(func=_patrol)
 
-    tune = sub.add_parser("tune", help="tune a PID baseline as docs/pendulum.md describes (minutes)")
+    tune = sub.add_parser("tune", help="tune a PID baseline (or the RSLQR) as docs/pendulum.md describes (minutes)")
     tune.add_argument("--loop", choices=("speed", "roll"), required=True)
+    tune.add_argument("--controller", choices=("pid", "rslqr"), default="pid", help="what to tune (pid)")
     common(tune)
     tune.set_defaults(func=_tune)
 
