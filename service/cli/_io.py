@@ -203,3 +203,14 @@ def read_map_arg(path: str, topic: str | None, robot: Any = None) -> OccupancyGr
     from service.grids import read_map
 
     return read_map(path, robot, "--map")
+
+
+def seed_int(text: str) -> int:
+    """argparse type of a ``--seed``: an integer ≥ 0."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not an integer") from None
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"{text!r} must be >= 0")
+    return value

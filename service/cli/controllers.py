@@ -17,7 +17,7 @@ from pathlib import Path
 from typing import Any
 
 from planner.errors import InvalidInput
-from service.cli._io import emit_json, finite_float, positive_float
+from service.cli._io import emit_json, finite_float, positive_float, seed_int
 
 VERB = "controllers"
 HELP = "pendulum-sphere motion control (paper 001 §5–6): LMPC/RSLQR vs PID steps, Figs. 10–13, tuning, timing"
@@ -141,16 +141,6 @@ def _patrol(args: argparse.Namespace) -> int:
     return 0
 
 
-def _seed(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{text!r} is not an integer") from None
-    if value < 0:
-        raise argparse.ArgumentTypeError(f"{text!r} must be >= 0")
-    return value
-
-
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     sub = parser.add_subparsers(dest="controllers_command", required=True, parser_class=type(parser))
 
@@ -192,7 +182,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="start, then goals (repeat; default: a garage patrol)",
     )
     pat.add_argument("--model", choices=("dynamic", "kinematic"), default="dynamic", help="plant (dynamic)")
-    pat.add_argument("--seed", type=_seed, default=0, help="seed of every disturbance (default 0)")
+    pat.add_argument("--seed", type=seed_int, default=0, help="seed of every disturbance (default 0)")
     pat.add_argument("--noise", choices=("none", "default"), default="default", help="disturbances")
     pat.add_argument("--out", metavar="F.json", help="write the SIM.json with the patrol report here")
     pat.add_argument("--plot", metavar="F.png", help="draw the patrol")

@@ -13,24 +13,14 @@ import sys
 from typing import Any
 
 from planner.errors import InvalidInput
-from service.cli._io import Stages, emit_result, is_bag, positive_float, read_bag_map, read_json_file, say
+from service.cli._io import Stages, emit_result, is_bag, positive_float, read_bag_map, read_json_file, say, seed_int
 
 VERB = "simulate"
 HELP = "roll a plan in closed loop (paper 001 MPC + odometry/GNSS fusion) and report tracking metrics"
 
 
-def _seed(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{text!r} is not an integer") from None
-    if value < 0:
-        raise argparse.ArgumentTypeError(f"{text!r} must be >= 0")
-    return value
-
-
 def _positive_int(text: str) -> int:
-    value = _seed(text)
+    value = seed_int(text)
     if value < 1:
         raise argparse.ArgumentTypeError(f"{text!r} must be >= 1")
     return value
@@ -51,7 +41,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument("--map-topic", metavar="TOPIC", help="topic of the map in an MCAP/rosbag2 --map (/map)")
     parser.add_argument("--robot", metavar="P", help="robot profile name or TOML (default: the plan's robot)")
-    parser.add_argument("--seed", type=_seed, default=0, help="seed of every disturbance (default 0)")
+    parser.add_argument("--seed", type=seed_int, default=0, help="seed of every disturbance (default 0)")
     parser.add_argument("--noise", choices=("none", "default"), default="default", help="disturbances")
     parser.add_argument(
         "--tracker",
