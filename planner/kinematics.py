@@ -18,9 +18,22 @@ All functions are numba-compiled so the search can call them in its inner loop.
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 from numba import njit
+
+
+@dataclass(frozen=True)
+class SphereState:
+    """The sphere's kinematic state, as simulators and controllers exchange it: position (m), yaw (rad),
+    roll (rad) and wheel speed (m/s). The kinematic simulator's truth and the dynamic plant's snapshot."""
+
+    x: float
+    y: float
+    yaw: float
+    roll: float = 0.0
+    v: float = 0.0
 
 STRAIGHT_EPS = 1e-9
 

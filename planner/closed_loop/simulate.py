@@ -24,7 +24,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from planner.closed_loop.localization import FilterParams, FusionFilter, OdometryIncrement, WheelOdometry
-from planner.closed_loop.simulator import Disturbances, SphereSimulator, SphereState
+from planner.closed_loop.simulator import Disturbances, SphereSimulator
 from planner.closed_loop.tracker import (
     Command,
     Estimate,
@@ -36,6 +36,7 @@ from planner.closed_loop.tracker import (
     wrap,
 )
 from planner.errors import InvalidInput
+from planner.kinematics import SphereState
 from planner.maps.clearance import footprint_clearance
 from planner.occupancy import OccupancyGrid
 from planner.robot import RobotProfile, load_robot
@@ -226,8 +227,7 @@ def simulate_plan(
         g = 1.0 - dist.slip_scale + (rng_slip.normal(0.0, dist.slip_noise) if dist.slip_noise > 0 else 0.0)
         if dyn is not None:
             dstep = dyn.step(state, cmd.v, cmd.roll, dt, ground_factor=g)
-            snap = dstep.state
-            state = SphereState(snap.x, snap.y, snap.yaw, snap.roll, snap.v)
+            state = dstep.state
             wheel_dist = dstep.wheel_distance_m
         else:
             step = sim.step(state, cmd.v, cmd.roll, dt, ground_factor=g)

@@ -23,18 +23,8 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from planner.kinematics import SphereState
 from planner.robot import RobotProfile
-
-
-@dataclass(frozen=True)
-class SphereState:
-    """True state of the sphere: position (m), yaw (rad), roll (rad), wheel speed (m/s)."""
-
-    x: float
-    y: float
-    yaw: float
-    roll: float = 0.0
-    v: float = 0.0
 
 
 @dataclass(frozen=True)

@@ -22,6 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from planner.errors import InvalidInput
+from planner.kinematics import SphereState
 from planner.pendulum.dynamics import (
     IA,
     IB,
@@ -39,21 +40,10 @@ from planner.robot import RobotProfile
 
 
 @dataclass(frozen=True)
-class SphereSnapshot:
-    """What the closed loop reads from the dynamic sphere: the kinematic pose and wheel speed."""
-
-    x: float
-    y: float
-    yaw: float
-    roll: float = 0.0
-    v: float = 0.0
-
-
-@dataclass(frozen=True)
 class DynamicStep:
     """One control period: the new state, the wheel distance (m) and the motor torques applied (N m)."""
 
-    state: SphereSnapshot
+    state: SphereState
     wheel_distance_m: float
     tau_pitch: float
     tau_roll: float
@@ -98,12 +88,12 @@ class DynamicSphere:
         self.max_pendulum_roll_rad = 0.0
 
     @property
-    def snapshot(self) -> SphereSnapshot:
+    def snapshot(self) -> SphereState:
         s = self.s
-        return SphereSnapshot(float(s[IX]), float(s[IY]), float(s[ITH]), float(s[IPHI]), float(s[IV]))
+        return SphereState(float(s[IX]), float(s[IY]), float(s[ITH]), float(s[IPHI]), float(s[IV]))
 
     def step(
-        self, state: object, v_cmd: float, roll_cmd: float, dt_s: float, ground_factor: float = 1.0
+        self, state: SphereState, v_cmd: float, roll_cmd: float, dt_s: float, ground_factor: float = 1.0
     ) -> DynamicStep:
         """Run both controllers on the measured plant state and integrate one period of ``dt_s``.
 
@@ -123,4 +113,4 @@ class DynamicSphere:
         return DynamicStep(self.snapshot, float(self.s[2]) - x_c0, tau_p, tau_r)
 
 
-__all__ = ["DynamicSphere", "DynamicStep", "SphereSnapshot"]
+__all__ = ["DynamicSphere", "DynamicStep", "SphereState"]
