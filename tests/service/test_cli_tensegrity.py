@@ -55,6 +55,8 @@ def test_gait_writes_json_and_plot(tmp_path: Path) -> None:
     )
     result = json.loads(out.read_text())
     assert result["net_displacement_m"] == pytest.approx(0.8)
+    # "forward 0.8 m" is towards +x in the world frame
+    assert result["steps"][-1]["centre_m"][0] - result["steps"][0]["centre_m"][0] == pytest.approx(0.8)
     assert result["state_sequence"][:2] == [1, 3]
     assert png.stat().st_size > 10_000
 
