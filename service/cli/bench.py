@@ -145,6 +145,11 @@ def run(args: argparse.Namespace) -> int:
               f"{cold_start_s(garage.map_path, garage.start, garage.goal):.2f} s")
     csv_path, png_path = args.csv or "bench.csv", args.png or "bench.png"
     write_csv(rows, csv_path)
-    plot_bench(rows, png_path)
+    budgets = {"ompl-BIT*": args.ompl_time, "ompl-RRT*": args.rrt_time}
+    title = (f"sphereplan bench: {robot.name}, {len(problems)} shipped problems "
+             f"({sum(not p.solvable for p in problems)} unsolvable), Hybrid A* median of {args.runs} runs"
+             + (f", BIT* {args.ompl_time:g} s" if args.ompl_time > 0 else "")
+             + (f", RRT* {args.rrt_time:g} s" if args.rrt_time > 0 else ""))
+    plot_bench(rows, png_path, title, args.runs, budgets)
     print(f"wrote {csv_path} and {png_path}")
     return 0
