@@ -8,9 +8,10 @@ from service.cli import main
 def test_bench_writes_table_csv_and_png(tmp_path, capsys):
     out_csv, out_png = tmp_path / "b.csv", tmp_path / "b.png"
     code = main(["bench", "--problems", "bench_over_wall1", "--runs", "1", "--ompl-time", "0.5", "--rrt-time", "0",
-                 "--csv", str(out_csv), "--png", str(out_png)])
+                 "--csv", str(out_csv), "--png", str(out_png), "-q"])
     assert code == 0
-    table = capsys.readouterr().out
+    table, err = capsys.readouterr()
+    assert err == ""  # -q (here after the verb): no progress bar
     assert "sphere-hybrid-a*" in table and "ompl-BIT*" in table
     rows = list(csv.DictReader(out_csv.open()))
     assert {r["planner"] for r in rows} == {"sphere-hybrid-a*", "ompl-BIT*"}
