@@ -135,11 +135,17 @@ def view_leaves_map(box: tuple[float, float, float, float], extent: tuple[float,
     return x0 < extent[0] - 1e-9 or x1 > extent[1] + 1e-9 or y0 < extent[2] - 1e-9 or y1 > extent[3] + 1e-9
 
 
-def legend_below(ax: Any, handles: Sequence[Any] | None = None, ncol: int = 3, fontsize: float = 8) -> Any:
-    """The legend under the axes, never over the data."""
-    kw: dict[str, Any] = {"loc": "upper center", "bbox_to_anchor": (0.5, -0.1), "ncol": ncol,
-                          "fontsize": fontsize, "frameon": False}
-    return ax.legend(handles=handles, **kw) if handles is not None else ax.legend(**kw)
+def legend_below(ax: Any, handles: Sequence[Any] | None = None, ncol: int = 3, fontsize: float = 8,
+                 labels: Sequence[str] | None = None) -> Any:
+    """The legend under the axes (below the x label, whatever the axes' height), never over the data."""
+    from matplotlib.transforms import offset_copy
+
+    below = offset_copy(ax.transAxes, fig=ax.figure, y=-34, units="points")
+    kw: dict[str, Any] = {"loc": "upper center", "bbox_to_anchor": (0.5, 0.0), "bbox_transform": below,
+                          "ncol": ncol, "fontsize": fontsize, "frameon": False}
+    if handles is None:
+        return ax.legend(**kw)
+    return ax.legend(handles, labels, **kw) if labels is not None else ax.legend(handles=handles, **kw)
 
 
 def legend_right(ax: Any, handles: Sequence[Any] | None = None, fontsize: float = 8) -> Any:
@@ -158,32 +164,73 @@ def legend_labels(fig: Any) -> list[str]:
     return labels
 
 
+def reverse_segments(v: np.ndarray) -> np.ndarray:
+    """Per segment (len(v) - 1): whether the motion is reverse, from the speeds at the points. Points where
+    v = 0 (start, cusps, roll changes on the spot, end) take the sign of the next move (the last ones: the
+    previous)."""
+    v = np.asarray(v, float).copy()
+    for i in range(len(v) - 2, -1, -1):
+        if v[i] == 0.0:
+            v[i] = v[i + 1]
+    for i in range(1, len(v)):
+        if v[i] == 0.0:
+            v[i] = v[i - 1]
+    return v[:-1] < 0
+
+
+def runs(reverse: np.ndarray) -> list[tuple[int, int, bool]]:
+    """Maximal runs of equal direction over segments: (first point, last point, reverse) index triples, so
+    that each run is drawn as one polyline (a dash pattern restarts on every line: per-segment lines of a
+    dense path would never show their gaps)."""
+    rev = np.asarray(reverse, bool)
+    out: list[tuple[int, int, bool]] = []
+    i = 0
+    while i < len(rev):
+        j = i
+        while j + 1 < len(rev) and rev[j + 1] == rev[i]:
+            j += 1
+        out.append((i, j + 1, bool(rev[i])))
+        i = j + 1
+    return out
+
+
 def path_line(ax: Any, xy: np.ndarray, reverse: np.ndarray | None, colour: Any, lw: float = 1.5,
               label: str | None = None, zorder: float = 3) -> list[Any]:
-    """A path with forward segments solid and reverse segments dashed; returns legend handles (the path,
-    and "… (reverse)" when it reverses)."""
-    from matplotlib.collections import LineCollection
+    """A path with forward runs solid and reverse runs dashed; returns legend handles (the path, and
+    "… (forward)"/"… (reverse)" when it reverses). ``reverse``: per segment (len(xy) - 1), or None."""
     from matplotlib.lines import Line2D
 
     xy = np.asarray(xy, float).reshape(-1, 2)
     if len(xy) < 2:
         return []
     rev = np.zeros(len(xy) - 1, bool) if reverse is None else np.asarray(reverse, bool)[: len(xy) - 1]
-    segs = np.stack([xy[:-1], xy[1:]], axis=1)
-    for mask, style in ((~rev, FORWARD_LS), (rev, REVERSE_LS)):
-        if mask.any():
-            ax.add_collection(LineCollection(list(segs[mask]), colors=[colour], linewidths=lw, linestyles=style,
-                                             zorder=zorder))
-    handles = [Line2D([], [], color=colour, lw=lw, label=label or "path")]
-    if rev.any():
-        handles[0].set_label(f"{label or 'path'} (forward)")
-        handles.append(Line2D([], [], color=colour, lw=lw, ls=REVERSE_LS, label=f"{label or 'path'} (reverse)"))
+    if len(rev) < len(xy) - 1:
+        rev = np.concatenate([rev, np.full(len(xy) - 1 - len(rev), rev[-1] if len(rev) else False)])
+    for a, b, backwards in runs(rev):
+        ax.plot(xy[a:b + 1, 0], xy[a:b + 1, 1], color=colour, lw=lw, ls=REVERSE_LS if backwards else FORWARD_LS,
+                zorder=zorder)
+    name = label or "path"
+    if not rev.any():
+        return [Line2D([], [], color=colour, lw=lw, label=name)]
+    handles = [Line2D([], [], color=colour, lw=lw, ls=REVERSE_LS, label=f"{name} (reverse)")]
+    if (~rev).any():
+        handles.insert(0, Line2D([], [], color=colour, lw=lw, label=f"{name} (forward)"))
     return handles
 
 
-def footprint_world(robot: RobotProfile, pose: Sequence[float]) -> np.ndarray:
-    """The padded footprint polygon (n, 2) at ``pose`` (x, y, yaw) in the world."""
-    poly = robot.footprint_polygon
+def reverse_overlay(ax: Any, xy: np.ndarray, reverse: np.ndarray, lw: float = 1.0, zorder: float = 3.5) -> None:
+    """White dashes along the reverse runs of a line that is coloured per segment (e.g. by roll): reverse
+    shows as a broken line whatever the colours."""
+    xy = np.asarray(xy, float).reshape(-1, 2)
+    for a, b, backwards in runs(np.asarray(reverse, bool)[: len(xy) - 1]):
+        if backwards:
+            ax.plot(xy[a:b + 1, 0], xy[a:b + 1, 1], color="white", lw=lw, ls=(0, (3, 3)), zorder=zorder)
+
+
+def footprint_world(robot: RobotProfile | np.ndarray, pose: Sequence[float] | np.ndarray) -> np.ndarray:
+    """The padded footprint polygon (n, 2) at ``pose`` (x, y, yaw) in the world (``robot``: a profile or its
+    padded polygon in the body frame, e.g. a result JSON's ``robot.footprint``)."""
+    poly = np.asarray(robot, float) if isinstance(robot, np.ndarray) else robot.footprint_polygon
     x, y, yaw = float(pose[0]), float(pose[1]), float(pose[2])
     c, s = math.cos(yaw), math.sin(yaw)
     return np.column_stack([x + c * poly[:, 0] - s * poly[:, 1], y + s * poly[:, 0] + c * poly[:, 1]])
@@ -219,8 +266,9 @@ def offending_cells(grid: OccupancyGrid, polygon: np.ndarray) -> np.ndarray:
     return np.column_stack([rows[hit], cols[hit]])
 
 
-def draw_footprint(ax: Any, grid: OccupancyGrid | None, robot: RobotProfile, pose: Sequence[float], colour: Any,
-                   label: str, collided: bool = False, lw: float = 1.2) -> list[Any]:
+def draw_footprint(ax: Any, grid: OccupancyGrid | None, robot: RobotProfile | np.ndarray,
+                   pose: Sequence[float] | np.ndarray, colour: Any, label: str, collided: bool = False,
+                   lw: float = 1.2) -> list[Any]:
     """The footprint at ``pose``; when ``collided``, red and filled with the blocked cells it overlaps marked
     (and whether it leaves the map). Returns legend handles."""
     from matplotlib.patches import Patch, Polygon, Rectangle

@@ -47,23 +47,21 @@ def plan_figure(
     if states is not None and len(states) > 1:
         xy = states[:, :2]
         segs = np.stack([xy[:-1], xy[1:]], axis=1)
-        reverse = states[:-1, 4] < 0
+        reverse = ps.reverse_segments(states[:, 4])
         lim = math.degrees(robot.max_roll_rad)
-        lc = None
-        for mask, style in ((~reverse, ps.FORWARD_LS), (reverse, ps.REVERSE_LS)):
-            if not mask.any():
-                continue
-            lc = LineCollection(list(segs[mask]), cmap="coolwarm", linewidths=2.4, linestyles=style, zorder=3)
-            lc.set_array(np.degrees(states[:-1, 3][mask]))
-            lc.set_clim(-lim, lim)
-            ax.add_collection(lc)
-        if lc is not None:
-            fig.colorbar(lc, ax=ax, fraction=0.03, pad=0.02, label="roll (deg, > 0 turns left)")
+        lc = LineCollection(list(segs), cmap="coolwarm", linewidths=2.6, zorder=3)
+        lc.set_array(np.degrees(states[:-1, 3]))
+        lc.set_clim(-lim, lim)
+        ax.add_collection(lc)
+        ps.reverse_overlay(ax, xy, reverse, lw=1.1)
+        fig.colorbar(lc, ax=ax, fraction=0.03, pad=0.02, label="roll (deg, > 0 turns left)")
         from matplotlib.lines import Line2D
 
-        handles.append(Line2D([], [], color="0.3", lw=2.4, ls=ps.FORWARD_LS, label="forward (colour: roll)"))
+        if (~reverse).any():
+            handles.append(Line2D([], [], color="0.3", lw=2.6, label="forward (colour: roll)"))
         if reverse.any():
-            handles.append(Line2D([], [], color="0.3", lw=2.4, ls=ps.REVERSE_LS, label="reverse (colour: roll)"))
+            pair = (Line2D([], [], color="0.3", lw=2.6), Line2D([], [], color="white", lw=1.1, ls=(0, (3, 3))))
+            handles.append(_Pair(pair, "reverse (white dashes; colour: roll)"))
         next_s = 0.0
         for row in states:
             if row[6] + 1e-9 >= next_s:
@@ -80,9 +78,22 @@ def plan_figure(
     if ps.view_leaves_map(box, extent):
         handles.append(ps.outside_handle())
     zoom = ps.apply_view(ax, box, extent)
-    ps.legend_below(ax, _dedupe(handles), ncol=3)
+    handles = _dedupe(handles)
+    # a _Pair is drawn as its two lines on top of each other (matplotlib's default handler of a tuple)
+    ps.legend_below(ax, [h.artists if isinstance(h, _Pair) else h for h in handles], ncol=3,
+                    labels=[h.get_label() for h in handles])
     ax.set_title((title or f"{grid.name}: {robot.name}") + zoom, fontsize=10)
     return fig
+
+
+class _Pair:
+    """Two legend artists shown as one entry, with its label."""
+
+    def __init__(self, artists: tuple[Any, Any], label: str) -> None:
+        self.artists, self.label = artists, label
+
+    def get_label(self) -> str:
+        return self.label
 
 
 def _footprint_handle(label: str) -> Any:
