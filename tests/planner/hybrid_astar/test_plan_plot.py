@@ -28,7 +28,7 @@ def test_plan_figure_has_every_map_class_forward_reverse_and_a_zoomed_title() ->
     for entry in ("free", "unknown (blocked)", "occupied", "start", "goal"):
         assert entry in labels
     assert any(label.startswith("clearance band") for label in labels)
-    assert "forward (colour: roll)" in labels and "reverse (colour: roll)" in labels
+    assert "forward (colour: roll)" in labels and "reverse (white dashes; colour: roll)" in labels
     ax = fig.axes[0]
     assert "garage: test" in ax.get_title() and "view" in ax.get_title()  # zoomed into the 40 × 30 m map
     x0, x1 = ax.get_xlim()
