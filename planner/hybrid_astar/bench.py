@@ -275,8 +275,8 @@ def bench_figure(rows: list[BenchRow], title: str = "", runs: int | None = None,
                 failed_any = True
                 ax_t.bar(x, t_ms, width, fc="white", ec="red", hatch="//", lw=0.8, zorder=2)
                 ax_t.plot(x, t_ms, "x", color="red", ms=7, mew=2, zorder=3)
-                ax_l.plot(x, 1.0, "x", color="red", ms=8, mew=2, zorder=3)
-                ax_l.text(x, 1.03, failure_word(r), rotation=90, ha="center", va="bottom", fontsize=7, color="red")
+                ax_l.plot(x, 0.93, "x", color="red", ms=8, mew=2, zorder=3)  # no length: below the scale's 1.0
+                ax_l.text(x, 0.96, failure_word(r), rotation=90, ha="center", va="bottom", fontsize=7, color="red")
             elif not r.solvable:  # an unsolvable problem: the time it took to say so (or to give up)
                 ax_t.bar(x, t_ms, width, fc=colour, alpha=0.45, hatch=".." if reported_unsolvable(r) else "//",
                          zorder=2)
