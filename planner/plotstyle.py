@@ -152,6 +152,8 @@ def legend_right(ax: Any, handles: Sequence[Any] | None = None, fontsize: float 
     """The legend beside the axes (right), never over the data."""
     kw: dict[str, Any] = {"loc": "upper left", "bbox_to_anchor": (1.01, 1.0), "fontsize": fontsize,
                           "frameon": False, "borderaxespad": 0.0}
+    if handles is None and not ax.get_legend_handles_labels()[0]:
+        return None  # nothing labelled in this panel (e.g. no problem solved by both)
     return ax.legend(handles=handles, **kw) if handles is not None else ax.legend(**kw)
 
 
