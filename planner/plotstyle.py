@@ -281,7 +281,8 @@ def draw_footprint(ax: Any, grid: OccupancyGrid | None, robot: RobotProfile | np
         return [Patch(fill=False, ec=colour, lw=lw, label=label)]
     ax.add_patch(Polygon(world, closed=True, fc=COLLISION_COLOUR, alpha=0.25, ec="none", zorder=4))
     ax.add_patch(Polygon(world, closed=True, fill=False, lw=1.8, ec=COLLISION_COLOUR, zorder=6))
-    handles: list[Any] = [Patch(fc=(1, 0, 0, 0.25), ec=COLLISION_COLOUR, lw=1.8, label=f"{label} (in collision)")]
+    red = Patch(fc=(1, 0, 0, 0.25), ec=COLLISION_COLOUR, lw=1.8, label=f"{label} (in collision)")
+    handles: list[Any] = [red]
     if grid is not None:
         cells = offending_cells(grid, world)
         res = grid.resolution_m
@@ -297,6 +298,8 @@ def draw_footprint(ax: Any, grid: OccupancyGrid | None, robot: RobotProfile | np
             ax.add_patch(Rectangle((ext[0], ext[2]), ext[1] - ext[0], ext[3] - ext[2], fill=False,
                                    ec=COLLISION_COLOUR, ls=":", lw=1.0, zorder=5))
             handles.append(Patch(fill=False, ec=COLLISION_COLOUR, ls=":", label="map edge (the footprint leaves it)"))
+            if not len(cells):
+                red.set_label(f"{label} (outside the map)")
     return handles
 
 

@@ -139,6 +139,6 @@ def test_failed_plan_still_writes_the_plot(capsys, tmp_path, monkeypatch, endpoi
         assert "goal footprint (in collision)" in labels
         assert any(label.startswith("blocked cells it overlaps") for label in labels)
     if words == "start outside the map":
-        assert "start footprint (in collision)" in labels and "outside the map" in labels
+        assert "start footprint (outside the map)" in labels and "outside the map" in labels
     if exit_code == 3:
         assert not any("in collision" in label for label in labels)
