@@ -41,10 +41,12 @@ from planner.errors import (
     NoValidPathFound,
     PlannerCancelled,
     PlannerTimedOut,
+    PlanningError,
     StartOccupied,
     StartOutsideMap,
 )
 from planner.hybrid_astar import core
+from planner.hybrid_astar.dubins import dubins_distance
 from planner.hybrid_astar.heuristics import HolonomicHeuristic, auto_downsample, coarse_cost_grid, reeds_shepp_table
 from planner.hybrid_astar.reeds_shepp import sphere_shot
 from planner.kinematics import child_pose, densify_motions, wrap
@@ -61,6 +63,8 @@ HEURISTIC_CACHE_SIZE = 8  # holonomic tables kept per planner (one per goal cell
 GOAL_CHECK_AFTER = 20_000  # expansions without a path before the goal's surroundings are searched (fail fast)
 GOAL_CHECK_BUDGET = 40_000  # expansions that search may take
 GOAL_CHECK_SHARE = 0.15  # ... and at most this share of the time limit
+FORWARD_RETRY_MIN = 20_000  # expansions a forward-only search may always take to find a cheaper path
+FORWARD_RETRY_SHARE = 0.5  # ... tried when the path found rolls more than this share of its length backwards
 CLOSED_SET_BUDGET_MB = 1024  # the closed-set bitset of one plan may not exceed this (≈ 9000² cells at defaults)
 
 
@@ -95,6 +99,7 @@ class PlannerOptions:
     smooth: bool = True               # shortcut the search's path with collision-checked rollable Dubins shots
     smooth_max_tries: int = 24        # candidate shortcut targets tried per path knot
     smooth_passes: int = 3            # shortcut passes; later passes re-subdivide the path (≈ 2 % shorter)
+    prefer_forward: bool = True       # with reversing: also try a bounded forward-only search, keep the cheaper
 
     def __post_init__(self) -> None:
         """Every option set is checked when it is made: raise :class:`InvalidInput` naming the first bad option."""
@@ -181,14 +186,30 @@ def warm_up() -> float:
     return took
 
 
+def _direction_runs(motions: list[tuple[float, float, float]]) -> list[tuple[int, list[tuple[float, float, float]]]]:
+    """Split motions into maximal stretches of one travel direction (+1 / −1); a zero-length motion (a roll
+    change on the spot) joins the stretch it is in."""
+    runs: list[tuple[int, list[tuple[float, float, float]]]] = []
+    for m in motions:
+        d = 1 if m[2] > 0 else -1 if m[2] < 0 else 0
+        if runs and (d == 0 or d == runs[-1][0]):
+            runs[-1][1].append(m)
+        elif d == 0:
+            runs.append((1, [m]))
+        else:
+            runs.append((d, [m]))
+    return runs
+
+
 class _Search:
     """The arrays of one search (open heap, nodes, closed bitset) and chunked calls of the compiled loop."""
 
     def __init__(self, planner: HybridAStar, start: Pose, goal: Pose, heur: HolonomicHeuristic,
-                 o: PlannerOptions) -> None:
+                 o: PlannerOptions, reverse: bool) -> None:
         self.planner = planner
         self.heur = heur
-        p = planner._params(goal)
+        self.reverse = reverse
+        p = planner._params(goal, reverse)
         p[core.P_HOX], p[core.P_HOY] = heur.origin_xy
         p[core.P_HCELL] = heur.cell_m
         p[core.P_BEST_H] = math.inf
@@ -339,7 +360,7 @@ class HybridAStar:
         """Footprint margin (m) at a pose: ≥ 0 means free (circles first, the exact polygon where they touch)."""
         return float(self.clearance.footprint_margins(self.footprint, self.polygon, np.array([pose]))[0])
 
-    def _params(self, goal: Pose) -> np.ndarray:
+    def _params(self, goal: Pose, reverse: bool) -> np.ndarray:
         o = self.options
         p = np.zeros(core.N_PARAMS)
         p[core.P_OX], p[core.P_OY] = self.clearance.origin_x, self.clearance.origin_y
@@ -360,11 +381,11 @@ class HybridAStar:
         p[core.P_REACH] = float(np.hypot(self.footprint.offsets_x, self.footprint.offsets_y).max())
         p[core.P_GREED], p[core.P_SHOT_RATIO] = o.greed, o.analytic_ratio_m
         p[core.P_MAX_ROLL] = self.robot.max_roll_rad
-        p[core.P_USE_DUBINS] = 0.0 if self.reverse else 1.0
-        p[core.P_USE_RS] = 1.0 if self.reverse else 0.0
+        p[core.P_USE_DUBINS] = 0.0 if reverse else 1.0
+        p[core.P_USE_RS] = 1.0 if reverse else 0.0
         p[core.P_RS_CELL] = RS_CELL_M
         p[core.P_RS_HALF] = self.rs_table.shape[2] // 2
-        p[core.P_ALLOW_REVERSE] = 1.0 if self.reverse else 0.0
+        p[core.P_ALLOW_REVERSE] = 1.0 if reverse else 0.0
         p[core.P_N_YAW] = o.n_yaw_bins
         return p
 
@@ -405,26 +426,73 @@ class HybridAStar:
                 f"({start[0]:.2f}, {start[1]:.2f}) by any route wide enough for the robot",
                 planning_time_s=time.perf_counter() - t0,
             )
-        run = _Search(self, start, goal, heur, o)
-        checked_goal = False
+        run = _Search(self, start, goal, heur, o, self.reverse)
+        self._drive(run, start, goal, o, t0, deadline, cancel)
+        motions = self._motions(run)
+        raw_length = self._length(start, motions)
+        t_search = time.perf_counter() - t0
+        motions = self._smooth(start, motions, run.p, o)
+        t_smooth = time.perf_counter() - t0 - t_search
+        extra: dict[str, Any] = {"unsmoothed_length_m": raw_length, "search_time_s": t_search,
+                                 "smoothing_time_s": t_smooth}
+        analytic = int(run.counters[core.C_SHOT_SEGS])
+        expansions = run.expansions
+        if self.reverse and o.prefer_forward:
+            fwd, forward = self._forward_alternative(start, goal, heur, o, deadline, cancel, motions, run.expansions)
+            if fwd is not None:
+                expansions += fwd.expansions
+                extra["forward_alternative_expansions"] = fwd.expansions
+            if fwd is not None and forward is not None:
+                motions = forward
+                analytic = int(fwd.counters[core.C_SHOT_SEGS])
+                extra["forward_alternative"] = True
+        poses = self._densify(start, motions, o.state_spacing_m)
+        fine = self._densify(start, motions, self.grid.resolution_m / 4)
+        margins = self.clearance.footprint_margins(self.footprint, self.polygon, fine[:, :3])
+        if margins.min() < 0:
+            raise NoValidPathFound("internal check failed: the exact re-check of the final path found a collision")
+        # The circles' margin is a lower bound of the polygon's clearance: only poses whose bound could beat
+        # the best exact distance found so far are measured exactly.
+        clearance_m = self.clearance.min_footprint_distance(self.polygon, fine[:, :3], margins, CLEARANCE_REACH_M)
+        elapsed = time.perf_counter() - t0
+        return PlanResult(
+            status="exact",
+            error_code=0,
+            error_msg="",
+            planning_time_s=elapsed,
+            expansions=expansions,
+            robot=self.robot,
+            map_name=self.grid.name,
+            start=start,
+            goal=goal,
+            states=build_states(poses, self.robot),
+            min_clearance_m=clearance_m,
+            analytic_segments=analytic,
+            extra=extra,
+        )
+
+    def _drive(self, run: _Search, start: Pose, goal: Pose, o: PlannerOptions, t0: float, deadline: float,
+               cancel: Callable[[], bool] | None, fail_fast: bool = True) -> None:
+        """Run the search in compiled chunks until it finds the goal; raise the planning error otherwise."""
+        checked_goal = not (fail_fast and o.dead_end_check)
         tried_from = -1
         while True:
             # 3b. Reeds–Shepp analytic expansion (reversing robots), from the start and then from the node
             #     closest to the goal by the heuristic whenever that changes, between compiled chunks.
             best = int(run.counters[core.C_BEST])
-            if self.reverse and best != tried_from:
+            if run.reverse and best != tried_from:
                 tried_from = best
                 if run.reeds_shepp_shot(best):
-                    break
+                    return
             status = run.step(min(o.chunk_expansions, o.max_iterations - run.expansions))
             if status == core.FOUND:
-                break
+                return
             if status == core.EXHAUSTED:
                 raise NoValidPathFound(
                     f"no valid path: the search exhausted every state reachable from the start "
                     f"({run.expansions} expansions)", planning_time_s=time.perf_counter() - t0,
                     expansions=run.expansions)
-            if o.dead_end_check and not checked_goal and run.expansions >= GOAL_CHECK_AFTER:
+            if not checked_goal and run.expansions >= GOAL_CHECK_AFTER:
                 # 5b. Fail fast: a bounded search of the reverse problem (from the goal, every motion run
                 # backwards) that exhausts proves the goal pose cannot be approached at all.
                 checked_goal = True
@@ -445,44 +513,67 @@ class HybridAStar:
                 raise PlannerTimedOut(
                     f"no path found within the time limit of {o.time_limit_s:g} s ({run.expansions} expansions)",
                     planning_time_s=time.perf_counter() - t0, expansions=run.expansions)
-        motions = self._motions(run.node_f, run.node_i, int(run.counters[core.C_RESULT]),
-                                run.seg_roll, run.seg_curv, run.seg_len, int(run.counters[core.C_SHOT_SEGS]))
-        raw_length = self._length(start, motions)
-        t_search = time.perf_counter() - t0
-        if o.smooth:
-            length = raw_length
-            for k in range(o.smooth_passes):
-                candidate = self._shortcut(start, self._subdivide(motions) if k else motions, run.p,
-                                           o.smooth_max_tries)
-                new_length = self._length(start, candidate)
-                if new_length > length - 1e-3:
-                    break
-                motions, length = candidate, new_length
-        t_smooth = time.perf_counter() - t0 - t_search
-        poses = self._densify(start, motions, o.state_spacing_m)
-        fine = self._densify(start, motions, self.grid.resolution_m / 4)
-        margins = self.clearance.footprint_margins(self.footprint, self.polygon, fine[:, :3])
-        if margins.min() < 0:
-            raise NoValidPathFound("internal check failed: the exact re-check of the final path found a collision")
-        # The circles' margin is a lower bound of the polygon's clearance: only poses whose bound could beat
-        # the best exact distance found so far are measured exactly.
-        clearance_m = self.clearance.min_footprint_distance(self.polygon, fine[:, :3], margins, CLEARANCE_REACH_M)
-        elapsed = time.perf_counter() - t0
-        return PlanResult(
-            status="exact",
-            error_code=0,
-            error_msg="",
-            planning_time_s=elapsed,
-            expansions=run.expansions,
-            robot=self.robot,
-            map_name=self.grid.name,
-            start=start,
-            goal=goal,
-            states=build_states(poses, self.robot),
-            min_clearance_m=clearance_m,
-            analytic_segments=int(run.counters[core.C_SHOT_SEGS]),
-            extra={"unsmoothed_length_m": raw_length, "search_time_s": t_search, "smoothing_time_s": t_smooth},
-        )
+
+    def _smooth(self, start: Pose, motions: list[tuple[float, float, float]], p: np.ndarray, o: PlannerOptions
+                ) -> list[tuple[float, float, float]]:
+        """Shortcut passes while they shorten the path by more than a millimetre."""
+        if not o.smooth:
+            return motions
+        length = self._length(start, motions)
+        for k in range(o.smooth_passes):
+            candidate = self._shortcut(start, self._subdivide(motions) if k else motions, p, o.smooth_max_tries)
+            new_length = self._length(start, candidate)
+            if new_length > length - 1e-3:
+                break
+            motions, length = candidate, new_length
+        return motions
+
+    def _travel_cost(self, start: Pose, motions: list[tuple[float, float, float]], o: PlannerOptions) -> float:
+        """The path's length with the search's direction terms: reverse metres × ``reverse_penalty`` and
+        ``switch_cost_m`` per cusp (the terms by which the search prefers rolling forwards)."""
+        cost = self._length(start, motions)
+        last = 0
+        for _, _, s in motions:
+            if s < 0:
+                cost += (o.reverse_penalty - 1.0) * -s
+            d = 1 if s > 0 else -1 if s < 0 else 0
+            if d and last and d != last:
+                cost += o.switch_cost_m
+            last = d or last
+        return cost
+
+    def _forward_alternative(
+        self, start: Pose, goal: Pose, heur: HolonomicHeuristic, o: PlannerOptions, deadline: float,
+        cancel: Callable[[], bool] | None, motions: list[tuple[float, float, float]], expansions: int,
+    ) -> tuple[_Search | None, list[tuple[float, float, float]] | None]:
+        """The forward-only search run (None when not tried) and its path when it costs less than ``motions``
+        by :meth:`_travel_cost` (else None).
+
+        The search with reversing is weighted (f = g + (1 + greed)·h) and its Reeds–Shepp heuristic does not
+        see the reverse penalty, so where reversing looks as good as turning round it may roll most of the way
+        backwards although turning round costs less. When the path it found rolls most of its length backwards
+        (more than FORWARD_RETRY_SHARE; backing out of a dead end is fine) and a forward path could be cheaper
+        (the Dubins distance is below its cost), a forward-only search (whose Dubins heuristic does
+        see the turn) gets at most max(FORWARD_RETRY_MIN, the first search's) expansions and what is left of
+        the time limit; the cheaper of the two paths is returned.
+        """
+        backwards = sum(-s for _, _, s in motions if s < 0)
+        if backwards <= FORWARD_RETRY_SHARE * self._length(start, motions):
+            return None, None
+        cost = self._travel_cost(start, motions, o)
+        if dubins_distance(*start, *goal, self.robot.min_turning_radius_m) >= cost:
+            return None, None
+        cap = max(FORWARD_RETRY_MIN, expansions)
+        fo = replace(o, max_iterations=min(o.max_iterations, cap))
+        run = _Search(self, start, goal, heur, fo, False)
+        try:
+            self._drive(run, start, goal, fo, time.perf_counter(), deadline, cancel, fail_fast=False)
+        except PlannerCancelled:
+            raise
+        except PlanningError:
+            return run, None
+        forward = self._smooth(start, self._motions(run), run.p, o)
+        return run, (forward if self._travel_cost(start, forward, o) < cost else None)
 
     def _reverse_search(self, start: Pose, goal: Pose, o: PlannerOptions, deadline: float) -> int | None:
         """Search the reverse problem within :data:`GOAL_CHECK_BUDGET` expansions: from the goal to the start
@@ -497,7 +588,7 @@ class HybridAStar:
         if self.pose_margin(back_start) < 0:
             return None
         heur = self.holonomic(back_goal[:2], back_start[:2])
-        run = _Search(self, back_start, back_goal, heur, o)
+        run = _Search(self, back_start, back_goal, heur, o, self.reverse)
         while run.expansions < GOAL_CHECK_BUDGET and time.perf_counter() < deadline:
             status = run.step(min(o.chunk_expansions, GOAL_CHECK_BUDGET - run.expansions))
             if status == core.EXHAUSTED:
@@ -506,10 +597,10 @@ class HybridAStar:
                 return None
         return None
 
-    def _knots(self, start: Pose, motions: list[tuple[float, float, float]]) -> np.ndarray:
+    def _knots(self, start: Pose, motions: list[tuple[float, float, float]], roll: float = 0.0) -> np.ndarray:
         """Pose (x, y, yaw, roll) and distance travelled at the start and after every motion: (n+1, 5)."""
         x, y, yaw = start
-        roll, dist = 0.0, 0.0
+        dist = 0.0
         rows = [(x, y, yaw, roll, dist)]
         for held, curv, s in motions:
             x2, y2, yaw2 = child_pose(x, y, yaw, roll, held, curv, self.robot.radius_m, s)
@@ -533,14 +624,46 @@ class HybridAStar:
     def _shortcut(
         self, start: Pose, motions: list[tuple[float, float, float]], p: np.ndarray, max_tries: int
     ) -> list[tuple[float, float, float]]:
-        """Replace runs of motions by shorter, collision-free rollable Dubins shots (see ``core.shortcut``)."""
-        knots = self._knots(start, motions)
+        """Shortcut the path with forward shots (which may also replace a manoeuvre with cusps), then each
+        stretch travelled backwards with reverse shots; the cusps left stay where they are.
+
+        A reverse stretch is shortcut as the forward one it mirrors: with the heading turned by π the
+        sphere rolls it forwards with every roll and curvature negated (eq. 1 is unchanged under
+        (yaw, φ, κ, s) → (yaw + π, −φ, −κ, −s)) and the footprint turned by π with it.
+        """
+        motions = self._shortcut_run(start, 0.0, motions, p, max_tries, flip=False)
+        out: list[tuple[float, float, float]] = []
+        x, y, yaw = start
+        roll = 0.0
+        for direction, run in _direction_runs(motions):
+            if direction > 0:
+                out.extend(run)
+            else:
+                mirrored = [(-h, -c, -s) for h, c, s in run]
+                done = self._shortcut_run((x, y, yaw + math.pi), -roll, mirrored, p, max_tries, flip=True)
+                out.extend((-h, -c, -s) for h, c, s in done)
+            end = self._knots((x, y, yaw), run, roll)[-1]
+            x, y, yaw, roll = float(end[0]), float(end[1]), float(end[2]), float(end[3])
+        return out
+
+    def _footprint_arrays(self, flip: bool = False) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """Covering-circle offsets (x, y) and polygon (x, y) in the robot frame; ``flip`` turns them by π, for
+        a pose whose heading was turned by π (a mirrored reverse stretch)."""
+        sign = -1.0 if flip else 1.0
+        return (sign * self.footprint.offsets_x, sign * self.footprint.offsets_y, sign * self._px, sign * self._py)
+
+    def _shortcut_run(
+        self, start: Pose, roll: float, motions: list[tuple[float, float, float]], p: np.ndarray, max_tries: int,
+        flip: bool,
+    ) -> list[tuple[float, float, float]]:
+        """Replace runs of forward motions by shorter, collision-free rollable Dubins shots (``core.shortcut``);
+        ``flip`` turns the footprint by π (a mirrored reverse stretch)."""
+        knots = self._knots(start, motions, roll)
         n = len(knots)
         out_ij = np.zeros((n, 2), dtype=np.int64)
         out_roll, out_curv, out_len = (np.zeros((n, core.MAX_SHOT_SEGS)) for _ in range(3))
         out_n = np.zeros(n, dtype=np.int64)
-        count = core.shortcut(self.clearance.clearance, self.clearance.blocked, p, self.footprint.offsets_x,
-                              self.footprint.offsets_y, self._px, self._py,
+        count = core.shortcut(self.clearance.clearance, self.clearance.blocked, p, *self._footprint_arrays(flip),
                               np.ascontiguousarray(knots[:, :4]), np.ascontiguousarray(knots[:, 4]), max_tries,
                               out_ij, out_roll, out_curv, out_len, out_n)
         result: list[tuple[float, float, float]] = []
@@ -556,11 +679,11 @@ class HybridAStar:
         result.extend(motions[k:])
         return result
 
-    def _motions(
-        self, node_f: np.ndarray, node_i: np.ndarray, result: int,
-        seg_roll: np.ndarray, seg_curv: np.ndarray, seg_len: np.ndarray, n_shot: int,
-    ) -> list[tuple[float, float, float]]:
+    def _motions(self, run: _Search) -> list[tuple[float, float, float]]:
         """The path as a list of (held roll, curvature, signed arc length) motions, ending upright."""
+        node_f, node_i, result = run.node_f, run.node_i, int(run.counters[core.C_RESULT])
+        seg_roll, seg_curv, seg_len = run.seg_roll, run.seg_curv, run.seg_len
+        n_shot = int(run.counters[core.C_SHOT_SEGS])
         chain = []
         k = result
         while node_i[k, 0] >= 0:
