@@ -32,12 +32,14 @@ from dataclasses import dataclass, field
 from functools import cached_property
 from importlib import resources
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
-from scipy.interpolate import PchipInterpolator
 
 from planner.errors import NotFound, RobotProfileError
+
+if TYPE_CHECKING:  # scipy.interpolate costs ~0.3 s to import: only when a roll table is interpolated
+    from scipy.interpolate import PchipInterpolator
 
 DEFAULT_ROBOT = "zju-60"
 ELLIPSE_VERTICES = 16  # the default footprint: this many vertices around the ellipse
@@ -99,6 +101,8 @@ class RollModel:
     @cached_property
     def _pchip(self) -> PchipInterpolator:
         """|φ| → κ through (0, 0) and the table; built once (the 100 Hz VPIP loop calls it often)."""
+        from scipy.interpolate import PchipInterpolator
+
         rolls = np.concatenate([[0.0], np.asarray(self.table_roll_rad, float)])
         kappa = np.concatenate([[0.0], 1.0 / np.asarray(self.table_radius_m, float)])
         return PchipInterpolator(rolls, kappa, extrapolate=False)

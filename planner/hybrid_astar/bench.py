@@ -207,32 +207,133 @@ def write_csv(rows: list[BenchRow], path: str | Path) -> None:
             writer.writerow(asdict(r))
 
 
-def plot_bench(rows: list[BenchRow], path: str | Path) -> None:
-    import matplotlib
+_PLANNER_COLOURS = {"sphere-hybrid-a*": "tab:blue", "ompl-BIT*": "tab:orange", "ompl-RRT*": "tab:green"}
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
 
-    problems = list(dict.fromkeys(r.problem for r in rows if r.solvable))
+def _planner_label(name: str, runs: int | None, budgets: dict[str, float]) -> str:
+    if name == "sphere-hybrid-a*":
+        return "sphere Hybrid A*: plan time" + (f" (median of {runs} runs)" if runs else " (median)")
+    if name == "ompl-BIT*":
+        return "OMPL BIT*: time to its first solution, length after " + (
+            f"{budgets[name]:g} s" if name in budgets else "its budget")
+    if name == "ompl-RRT*":
+        b = f"{budgets[name]:g} s" if name in budgets else "its budget"
+        return f"OMPL RRT*: best path within {b} (not a first solution; time = the budget)"
+    return name
+
+
+def failure_word(row: BenchRow) -> str:
+    """How a solvable problem's run failed, in one word for the picture: "timeout" or "failed"."""
+    return "timeout" if row.note.startswith("207") or "no solution in time" in row.note else "failed"
+
+
+def reported_unsolvable(row: BenchRow) -> bool:
+    """An unsolvable problem the planner answered with "no path" (not by running out of time)."""
+    return (not row.solvable and row.success and not row.note.startswith("207")
+            and "no solution in time" not in row.note)
+
+
+def bench_figure(rows: list[BenchRow], title: str = "", runs: int | None = None,
+                 budgets: dict[str, float] | None = None) -> Any:
+    """The bench picture: per problem (all of them, unsolvable ones shaded and marked) and planner, the time
+    (log scale) and the length ÷ best length found; failed runs drawn as hatched bars with a red × and why."""
+    from matplotlib.lines import Line2D
+    from matplotlib.patches import Patch
+
+    from planner.plotstyle import pyplot
+
+    plt = pyplot()
+    budgets = budgets or {}
+    problems = list(dict.fromkeys(r.problem for r in rows))
+    solvable = {r.problem: r.solvable for r in rows}
     planners = list(dict.fromkeys(r.planner for r in rows))
-    fig, axes = plt.subplots(2, 1, figsize=(12, 7), sharex=True)
+    fig, axes = plt.subplots(2, 1, figsize=(max(12.0, 0.42 * len(problems) + 3), 9), sharex=True)
+    ax_t, ax_l = axes
     width = 0.8 / len(planners)
+    centres = np.arange(len(problems))
+    ratio_top = 1.6
+    for i, p in enumerate(problems):
+        if not solvable[p]:
+            for ax in axes:
+                ax.axvspan(i - 0.5, i + 0.5, color="0.9", zorder=0)
+            said = [r.planner.replace("sphere-hybrid-a*", "Hybrid A*") for r in rows
+                    if r.problem == p and reported_unsolvable(r)]
+            ax_l.text(i, 1.25, f"unsolvable (reported by {', '.join(said)})" if said
+                      else "unsolvable (no planner reported it)", rotation=90, ha="center", va="center", fontsize=7,
+                      color="0.3")
+    failed_any = False
     for k, name in enumerate(planners):
         sel = {r.problem: r for r in rows if r.planner == name}
-        xs = np.arange(len(problems)) + k * width
-        axes[0].bar(xs, [sel[p].time_median_s * 1e3 if p in sel else 0 for p in problems], width, label=name)
-        axes[1].bar(xs, [sel[p].length_ratio if p in sel else 0 for p in problems], width, label=name)
-    axes[0].set_yscale("log")
-    axes[0].set_ylabel("time (ms; OMPL: first solution)")
-    axes[1].set_ylabel("length / best found")
-    axes[1].axhline(1.05, color="k", lw=0.8, ls="--")
-    axes[1].set_ylim(0.9, 1.6)
-    axes[1].set_xticks(np.arange(len(problems)) + 0.4 - width / 2)
-    axes[1].set_xticklabels(problems, rotation=60, ha="right", fontsize=7)
-    axes[0].legend(fontsize=8)
-    fig.tight_layout()
-    fig.savefig(path)
-    plt.close(fig)
+        colour = _PLANNER_COLOURS.get(name, f"C{k}")
+        for i, p in enumerate(problems):
+            if p not in sel:
+                continue
+            r = sel[p]
+            x = centres[i] - 0.4 + (k + 0.5) * width
+            t_ms = max(r.time_median_s * 1e3, 1e-3)
+            if r.solvable and not r.success:  # failed on a solvable problem: explicit
+                failed_any = True
+                ax_t.bar(x, t_ms, width, fc="white", ec="red", hatch="//", lw=0.8, zorder=2)
+                ax_t.plot(x, t_ms, "x", color="red", ms=7, mew=2, zorder=3)
+                ax_l.plot(x, 0.93, "x", color="red", ms=8, mew=2, zorder=3)  # no length: below the scale's 1.0
+                ax_l.text(x, 0.96, failure_word(r), rotation=90, ha="center", va="bottom", fontsize=7, color="red")
+            elif not r.solvable:  # an unsolvable problem: the time it took to say so (or to give up)
+                ax_t.bar(x, t_ms, width, fc=colour, alpha=0.45, hatch=".." if reported_unsolvable(r) else "//",
+                         zorder=2)
+            else:
+                ax_t.bar(x, t_ms, width, fc=colour, zorder=2)
+                ratio = r.length_ratio
+                ax_l.bar(x, min(ratio, ratio_top) - 0.9, width, bottom=0.9, fc=colour, zorder=2)
+                if ratio > ratio_top:
+                    ax_l.text(x, ratio_top - 0.01, f"{ratio:.2f}", rotation=90, ha="center", va="top", fontsize=7,
+                              color="white", fontweight="bold")
+    ax_t.set_yscale("log")
+    ax_t.set_ylabel("time (ms, log scale)")
+    ax_t.grid(axis="y", alpha=0.3, which="both")
+    ax_l.set_ylabel("length ÷ best length found")
+    ax_l.axhline(1.05, color="k", lw=0.8, ls="--", zorder=1)
+    ax_l.set_ylim(0.9, ratio_top)
+    ax_l.set_xticks(centres)
+    ax_l.set_xticklabels([p if solvable[p] else f"{p} (unsolvable)" for p in problems], rotation=60, ha="right",
+                         fontsize=7)
+    ax_l.set_xlim(-0.6, len(problems) - 0.4)
+    handles: list[Any] = [Patch(fc=_PLANNER_COLOURS.get(n, f"C{k}"), label=_planner_label(n, runs, budgets))
+                          for k, n in enumerate(planners)]
+    handles.append(Line2D([], [], color="k", lw=0.8, ls="--", label="5 % longer than the best length found"))
+    handles.append(Patch(fc="0.9", label="unsolvable problem: the right answer is \"no path\" (bar: time to say so)"))
+    handles.append(Patch(fc="0.7", hatch="..", label="unsolvable, answered \"no path\" (dotted bar)"))
+    handles.append(Patch(fc="0.7", hatch="//", label="unsolvable, ran its whole budget (hatched bar)"))
+    if failed_any:
+        handles.append(Line2D([], [], marker="x", color="red", ls="", mew=2,
+                              label="failed on a solvable problem (timeout / failed)"))
+    fig.legend(handles=handles, loc="lower center", ncol=2, fontsize=8, frameon=False)
+    fig.suptitle(title or "sphereplan bench: time and path length per problem and planner")
+    fig.tight_layout(rect=(0.0, 0.1, 1.0, 1.0))
+    return fig
+
+
+def plot_bench(rows: list[BenchRow], path: str | Path, title: str = "", runs: int | None = None,
+               budgets: dict[str, float] | None = None) -> None:
+    """Write :func:`bench_figure` to ``path``."""
+    from planner.plotstyle import save
+
+    save(bench_figure(rows, title, runs, budgets), path)
+
+
+def read_csv(path: str | Path) -> list[BenchRow]:
+    """Rows written by :func:`write_csv` (to redraw a picture without re-running the bench)."""
+    import csv
+
+    out = []
+    with open(path, newline="") as fh:
+        for d in csv.DictReader(fh):
+            out.append(BenchRow(
+                problem=d["problem"], planner=d["planner"], solvable=d["solvable"] == "True",
+                success=d["success"] == "True", time_median_s=float(d["time_median_s"]),
+                time_p95_s=float(d["time_p95_s"]), length_m=float(d["length_m"]),
+                length_ratio=float(d["length_ratio"]), min_clearance_m=float(d["min_clearance_m"]),
+                max_curvature=float(d["max_curvature"]), expansions=int(d["expansions"]), note=d["note"]))
+    return out
 
 
 def cold_start_s(map_path: Path, start: tuple[float, float, float], goal: tuple[float, float, float]) -> float:

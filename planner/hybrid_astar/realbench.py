@@ -611,11 +611,18 @@ def read_real_csv(path: str | Path) -> list[RunRecord]:
 
 def plot_real(records: Sequence[RunRecord], summaries: Sequence[MapSummary], path: str | Path, title: str) -> None:
     """A PNG summary: outcomes per map and planner, time per problem (failures drawn at the time limit),
-    length ÷ reference, and the true footprint clearance of each path."""
-    import matplotlib
+    length ÷ reference, and the true footprint clearance of each path (style: :mod:`planner.plotstyle`)."""
+    from planner.plotstyle import save
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    save(real_figure(records, summaries, title), path, dpi=90)
+
+
+def real_figure(records: Sequence[RunRecord], summaries: Sequence[MapSummary], title: str) -> Any:
+    """The figure :func:`plot_real` writes: legends beside the panels, proved-unsolvable problems shaded and
+    labelled, failures as × at the time they gave up."""
+    from planner.plotstyle import legend_right, pyplot
+
+    plt = pyplot()
 
     planners = [p for p in (SPHEREPLAN, BIT_DUBINS, BIT_REEDS_SHEPP) if any(r.planner == p for r in records)]
     colours = {SPHEREPLAN: "tab:blue", BIT_DUBINS: "tab:orange", BIT_REEDS_SHEPP: "tab:green"}
@@ -653,10 +660,17 @@ def plot_real(records: Sequence[RunRecord], summaries: Sequence[MapSummary], pat
     ax.set_title("outcome per map and planner (sp = sphereplan, D = BIT* Dubins, RS = BIT* Reeds–Shepp)")
     handles, names = ax.get_legend_handles_labels()
     unique = dict(zip(names, handles, strict=True))
-    ax.legend(unique.values(), unique.keys(), fontsize=7, ncol=8, loc="upper center")
+    legend_right(ax, list(unique.values()))
+    ax.get_legend().set_title("outcome", prop={"size": 7})
 
     x = np.arange(len(problems))
     lookup = {(r.map, r.problem, r.planner): r for r in records}
+    unsolvable = {(r.map, r.problem) for r in records if r.disconnected}
+    labels = [f"{lab} (unsolvable)" if key in unsolvable else lab for key, lab in zip(problems, labels, strict=True)]
+    for a in axes[1:]:
+        for i, key in enumerate(problems):
+            if key in unsolvable:
+                a.axvspan(i - 0.5, i + 0.5, color="0.9", zorder=0)
     ax = axes[1]  # times
     for k, planner in enumerate(planners):
         offs = (k - (len(planners) - 1) / 2) * 0.2
@@ -671,8 +685,13 @@ def plot_real(records: Sequence[RunRecord], summaries: Sequence[MapSummary], pat
                     mew=2, label=f"{planner}: failed / unsolved")
     ax.set_yscale("log")
     ax.set_ylabel("time (s, log)")
-    ax.set_title("time per problem (× = failed or unsolved, at the time it gave up)")
-    ax.legend(fontsize=7, ncol=2)
+    ax.set_title("time per problem (× = failed or unsolved, at the time it gave up; grey: proved unsolvable)")
+    handles, _ = ax.get_legend_handles_labels()
+    if unsolvable:
+        from matplotlib.patches import Patch
+
+        handles.append(Patch(fc="0.9", label="unsolvable (start and goal in different\nfree components)"))
+    legend_right(ax, handles)
 
     ax = axes[2]  # length ratio
     ratios = [(i, lookup[(m, p, SPHEREPLAN)].length_ratio) for i, (m, p) in enumerate(problems)
@@ -680,11 +699,11 @@ def plot_real(records: Sequence[RunRecord], summaries: Sequence[MapSummary], pat
     if ratios:
         ax.bar([i for i, _ in ratios], [v for _, v in ratios], 0.6, color=colours[SPHEREPLAN])
         ax.set_ylim(min(0.9, min(v for _, v in ratios) - 0.05), max(1.3, max(v for _, v in ratios) + 0.05))
-    ax.axhline(1.05, color="k", lw=0.8, ls="--", label="1.05")
+    ax.axhline(1.05, color="k", lw=0.8, ls="--", label="5 % longer than the reference")
     ax.axhline(1.0, color="k", lw=0.5)
     ax.set_ylabel("length ÷ BIT* reference")
     ax.set_title("sphereplan's length over the reference's final length (problems both solved; gaps: not both)")
-    ax.legend(fontsize=7)
+    legend_right(ax)
 
     ax = axes[3]  # clearance
     for k, planner in enumerate(planners):
@@ -699,15 +718,14 @@ def plot_real(records: Sequence[RunRecord], summaries: Sequence[MapSummary], pat
         ax.plot([a for a, _ in rep], [b for _, b in rep], "_", color="k", ms=10, label="sphereplan reported")
     ax.set_ylabel("least footprint clearance (m)")
     ax.set_title("true padded-footprint clearance along each solved path")
-    ax.legend(fontsize=7, ncol=4)
+    legend_right(ax)
     for a in axes[1:]:
         a.set_xticks(x)
         a.set_xticklabels(labels, rotation=70, ha="right", fontsize=7)
         a.set_xlim(-0.7, len(problems) - 0.3)
         a.set_xlabel("problem (map#index)")
     fig.tight_layout(rect=(0, 0, 1, 0.97))
-    fig.savefig(path, dpi=90)
-    plt.close(fig)
+    return fig
 
 
 @dataclass(frozen=True)

@@ -20,8 +20,6 @@ import math
 from typing import Any
 
 import numpy as np
-from scipy.optimize import minimize
-from scipy.spatial.transform import Rotation
 
 from planner.errors import InvalidInput
 from planner.robot import RobotProfile
@@ -51,6 +49,8 @@ def _anchor(name: str, radius: float) -> np.ndarray:
 
 
 def _pose(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    from scipy.spatial.transform import Rotation
+
     return Rotation.from_rotvec(x[:3]).as_matrix(), np.asarray(x[3:6])
 
 
@@ -82,6 +82,9 @@ def form_find(
     centres coincident (o12 = 0, as eq. 3 assumes) and optimises the rotation only. Also reports how
     eq. 3's pose compares (energy, gradient) and the paper's lengths.
     """
+    from scipy.optimize import minimize  # here, not at the top: `tensegrity static` never needs scipy
+    from scipy.spatial.transform import Rotation
+
     if starts < 1:
         raise InvalidInput("starts", f"must be at least 1, got {starts}")
     section = profile.extra.get("texplor", {})

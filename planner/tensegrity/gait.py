@@ -17,7 +17,8 @@ cone on its apex (the contact segment, length r√2, is a generator). No slip me
 velocity lies along the contact segment, which fixes the yaw rate: dψ/dφ = (n · t)/|q − p| with e the
 unit pivot→contact vector, n = z_b × e, t the arc tangent (eq. 5); |dψ/dφ| = 1/√2. The contact then
 moves on the ground by r·|Δφ| (an arc of radius r√2 about the pivot), O_b stays r/√2 high.
-The initial body pose is eq. 16 (Rodrigues, no yaw) with O_b above the origin.
+The initial body pose is eq. 16 (Rodrigues) with O_b above the origin, turned about z_s so that a full
+cycle advances along +x for a positive distance (forward ring) and along -x for a negative one.
 """
 
 from __future__ import annotations
@@ -169,7 +170,9 @@ def _yaw_of(rotation: np.ndarray) -> float:
 class _Gait:
     """Closed-form evaluation of a gait at progress σ (integer part: leg index, fraction: along the leg)."""
 
-    def __init__(self, params: TexplorParams, rect: Rectangle, start_state: int, forward: bool) -> None:
+    def __init__(
+        self, params: TexplorParams, rect: Rectangle, start_state: int, forward: bool, yaw0_rad: float = 0.0
+    ) -> None:
         self.params, self.rect, self.forward = params, rect, forward
         ring = FORWARD_RING if forward else REVERSE_RING
         k = ring.index(start_state)
@@ -179,7 +182,7 @@ class _Gait:
         state = self.ring[0]
         phi0 = self.leg_angle(0, 0.0)
         frame, _ = _frame(state, phi0, r)
-        rotation = rodrigues_up(surface_normal(state, *contact_angles(state, phi0)))
+        rotation = rot_z(yaw0_rad) @ rodrigues_up(surface_normal(state, *contact_angles(state, phi0)))
         spec = STATES[state]
         pivot = link_point(spec.pivot_link, spec.pivot_angle_rad, r)
         centre = np.array([0.0, 0.0, r / math.sqrt(2.0)])
@@ -282,7 +285,12 @@ def plan_gait(
     speed = float(section.get("slider_speed_rad_s", 0.5))
     rect = make_rectangle(corner, params)
     forward = distance_m > 0
-    gait = _Gait(params, rect, start_state, forward)
+    # Eq. 16 with no yaw sends a cycle some way off +x (forward: ~154°); turn the start pose about z_s
+    # so that a full cycle advances along +x (forward, distance > 0) or -x (reverse, distance < 0).
+    probe = _Gait(params, rect, start_state, forward)
+    probe_cycle = probe.centre(4.0) - probe.centre(0.0)
+    want = 0.0 if forward else math.pi
+    gait = _Gait(params, rect, start_state, forward, want - math.atan2(probe_cycle[1], probe_cycle[0]))
     start_centre = gait.centre(0.0)
     cycle = gait.centre(4.0) - start_centre
     heading = math.atan2(cycle[1], cycle[0])

@@ -9,22 +9,17 @@ from typing import Any
 import numpy as np
 
 
-def plot_schedule(result: Mapping[str, Any], out: str | Path, plan: Mapping[str, Any] | None = None) -> None:
-    """Write a PNG of ``result`` (from :func:`planner.vpip.cascade.run_schedule`) to ``out``.
+def schedule_figure(result: Mapping[str, Any], plan: Mapping[str, Any] | None = None) -> Any:
+    """The figure :func:`plot_schedule` writes (style: :mod:`planner.plotstyle`)."""
+    from planner import plotstyle as ps
 
-    Panels: the 16 commanded rod lengths as a heat map (rods × time); desired and simulated roll with
-    φ_VPIP; θ_VPIP with desired and simulated ω; the planned and tracked paths (x–y, metres).
-    """
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
+    plt = ps.pyplot()
     s = result["series"]
     t = np.asarray(s["t"])
     rods = np.asarray(s["rod_length_m"]).T
     deg = np.degrees
-    fig = plt.figure(figsize=(12, 9), constrained_layout=True)
+    kind = result.get("plant", {}).get("kind", "surrogate")
+    fig = plt.figure(figsize=(13, 9.5), constrained_layout=True)
     grid = fig.add_gridspec(3, 2, width_ratios=[2.2, 1])
     ax_rod = fig.add_subplot(grid[0, 0])
     ax_roll = fig.add_subplot(grid[1, 0], sharex=ax_rod)
@@ -42,49 +37,71 @@ def plot_schedule(result: Mapping[str, Any], out: str | Path, plan: Mapping[str,
         vmax=float(result["params"]["l_max"]),
     )
     ax_rod.axhline(n / 2 - 0.5, color="white", lw=0.8)
-    ax_rod.set_yticks([n / 4 - 0.5, 3 * n / 4 - 0.5], ["left ring", "right ring"])
+    # every rod by its number; the rings named on the right
+    ax_rod.set_yticks(range(n), [str(k) for k in range(n)], fontsize=7)
+    ax_rod.set_ylabel("rod number")
+    ring = ax_rod.secondary_yaxis("right")
+    ring.set_yticks([n / 4 - 0.5, 3 * n / 4 - 0.5], [f"left ring\n(0–{n // 2 - 1})", f"right ring\n({n // 2}–{n - 1})"])
+    ring.tick_params(length=0, labelsize=8)
     ax_rod.set_title(
         f"commanded rod lengths ({result['driver']} driver, rate-limited to "
-        f"{result['params']['rod_speed_m_s']} m/s)"
+        f"{result['params']['rod_speed_m_s']} m/s)", fontsize=10
     )
-    fig.colorbar(img, ax=ax_rod, label="length (m)", pad=0.01)
+    ax_rod.tick_params(labelbottom=False)
+    fig.colorbar(img, ax=ax_rod, label="rod length (m)", pad=0.01)
     ax_roll.plot(t, deg(s["roll_desired_rad"]), "k--", lw=1.2, label="desired roll")
-    kind = result.get("plant", {}).get("kind", "surrogate")
     ax_roll.plot(t, deg(s["roll_rad"]), "C0", lw=1.5, label=f"roll ({kind} plant)")
     ax_roll.plot(t, deg(s["phi_vpip_rad"]), "C3", lw=1.0, label="φ_VPIP")
-    ax_roll.set_ylabel("deg")
-    ax_roll.legend(loc="upper right", fontsize=8)
+    ax_roll.set_ylabel("angle (deg)")
+    ax_roll.set_title("roll: desired, reached, and the plane's φ_VPIP", fontsize=10)
+    ps.legend_right(ax_roll)
     ax_roll.grid(alpha=0.3)
-    ax_pitch.plot(t, deg(s["theta_vpip_rad"]), "C2", lw=1.0, label="θ_VPIP (deg)")
+    ax_roll.tick_params(labelbottom=False)
+    ax_pitch.plot(t, deg(s["theta_vpip_rad"]), "C2", lw=1.0, label="θ_VPIP (deg, left axis)")
     ax_w = ax_pitch.twinx()
-    ax_w.plot(t, s["omega_desired_rad_s"], "k--", lw=1.2, label="desired ω")
-    ax_w.plot(t, s["omega_rad_s"], "C1", lw=1.5, label=f"ω ({kind} plant)")
+    ax_w.plot(t, s["omega_desired_rad_s"], "k--", lw=1.2, label="desired ω (rad/s)")
+    ax_w.plot(t, s["omega_rad_s"], "C1", lw=1.5, label=f"ω ({kind} plant, rad/s)")
     ax_w.set_ylabel("ω (rad/s)")
     ax_pitch.set_ylabel("θ_VPIP (deg)")
     ax_pitch.set_xlabel("time (s)")
+    ax_pitch.set_title("speed: the plane's θ_VPIP and the rolling rate ω", fontsize=10)
     lines = ax_pitch.get_lines() + ax_w.get_lines()
-    ax_pitch.legend(lines, [str(line.get_label()) for line in lines], loc="upper right", fontsize=8)
+    ps.legend_below(ax_pitch, lines, ncol=3, labels=[str(line.get_label()) for line in lines])
     ax_pitch.grid(alpha=0.3)
     if plan is not None:
         xs = [st["x"] for st in plan["states"]]
         ys = [st["y"] for st in plan["states"]]
         ax_xy.plot(xs, ys, "k--", lw=1.2, label="planned")
-    ax_xy.plot(s["x"], s["y"], "C0", lw=1.5, label=f"tracked ({kind})")
+    ax_xy.plot(s["x"], s["y"], "C0", lw=1.5, label=f"tracked ({kind} plant)")
+    ax_xy.plot(s["x"][0], s["y"][0], "o", color=ps.START_COLOUR, label="start")
+    ax_xy.plot(s["x"][-1], s["y"][-1], "*", ms=10, color=ps.GOAL_COLOUR, label="end of the run")
     ax_xy.set_aspect("equal", adjustable="datalim")
     ax_xy.set_xlabel("x (m)")
     ax_xy.set_ylabel("y (m)")
-    ax_xy.legend(fontsize=8)
+    ps.legend_below(ax_xy, ncol=2)
     ax_xy.grid(alpha=0.3)
     summ = result["summary"]
+    reached = "reached the path's end" if summ.get("reached_end", True) else "did NOT reach the path's end"
     ax_xy.set_title(
-        f"cross-track error rms {summ.get('rms_lateral_error_m', float('nan')):.2f} m, "
+        f"ground track: {reached}\ncross-track error rms {summ.get('rms_lateral_error_m', float('nan')):.2f} m, "
         f"max {summ['max_lateral_error_m']:.2f} m",
         fontsize=9,
     )
     what = "MuJoCo rod physics" if kind == "mujoco" else "surrogate plant, not rod physics"
-    fig.suptitle(f"VPIP schedule — {result['robot']} — {what}")
-    fig.savefig(out, dpi=90)
-    plt.close(fig)
+    duration = f", {float(t[-1] - t[0]):.1f} s" if len(t) else ""
+    fig.suptitle(f"VPIP schedule: {result['robot']} along the planned path — {what}{duration}")
+    return fig
+
+
+def plot_schedule(result: Mapping[str, Any], out: str | Path, plan: Mapping[str, Any] | None = None) -> None:
+    """Write a PNG of ``result`` (from :func:`planner.vpip.cascade.run_schedule`) to ``out``.
+
+    Panels: the 16 commanded rod lengths as a heat map (rod number × time in s); desired and simulated roll
+    with φ_VPIP; θ_VPIP with desired and simulated ω; the planned and tracked paths (x–y, metres).
+    """
+    from planner.plotstyle import save
+
+    save(schedule_figure(result, plan), out, dpi=90)
 
 
 def plot_circle(result: Mapping[str, Any], out: str | Path) -> None:

@@ -50,6 +50,17 @@ def _add_talk_flags(parser: argparse.ArgumentParser, top: bool) -> None:
                       help="no progress, only errors on stderr")
 
 
+def _add_talk_flags_below(parser: argparse.ArgumentParser, seen: set[int]) -> None:
+    """The same flags on every sub-verb (``sphereplan vpip schedule … -q``), however deep."""
+    for action in parser._actions:
+        if isinstance(action, argparse._SubParsersAction):
+            for child in action.choices.values():
+                if id(child) not in seen:
+                    seen.add(id(child))
+                    _add_talk_flags(child, top=False)
+                    _add_talk_flags_below(child, seen)
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = _Parser(prog="sphereplan", description="Motion planning for spherical rolling robots.")
     _add_talk_flags(parser, top=True)
@@ -62,6 +73,7 @@ def build_parser() -> argparse.ArgumentParser:
         verb_parser = sub.add_parser(module.VERB, help=module.HELP, description=module.HELP)
         _add_talk_flags(verb_parser, top=False)
         module.add_arguments(verb_parser)
+        _add_talk_flags_below(verb_parser, set())
     return parser
 
 

@@ -57,6 +57,11 @@ def set_verbosity(level: int) -> None:
     _verbosity = level
 
 
+def quiet() -> bool:
+    """Whether ``-q`` was given (before or after the verb): no progress at all."""
+    return _verbosity < 0
+
+
 def say(verb: str, message: str) -> None:
     """A one-line summary on stderr (``sphereplan VERB: message``), unless ``-q``."""
     if _verbosity >= 0:

@@ -13,7 +13,7 @@ import sys
 from typing import TYPE_CHECKING, Any
 
 from planner.errors import InvalidInput
-from service.cli._io import finite_float, positive_float
+from service.cli._io import finite_float, positive_float, quiet
 
 if TYPE_CHECKING:  # the benchmark's modules load numba, scipy and OMPL: only when the verb runs (fast --help)
     from planner.hybrid_astar.search import PlannerOptions
@@ -82,7 +82,8 @@ def run_real(args: argparse.Namespace) -> int:
     from tqdm import tqdm
 
     per_problem = 1 if args.no_reference else 3
-    with tqdm(total=len(paths) * args.per_map * per_problem, file=sys.stderr, desc="bench real") as bar:
+    with tqdm(total=len(paths) * args.per_map * per_problem, file=sys.stderr, desc="bench real",
+              disable=quiet()) as bar:
 
         def progress(msg: str) -> None:
             bar.set_postfix_str(msg[:40])
@@ -131,7 +132,7 @@ def run(args: argparse.Namespace) -> int:
     from tqdm import tqdm
 
     planners = 1 + (args.ompl_time > 0) + (args.rrt_time > 0)
-    with tqdm(total=len(problems) * planners, file=sys.stderr, desc="bench") as bar:
+    with tqdm(total=len(problems) * planners, file=sys.stderr, desc="bench", disable=quiet()) as bar:
 
         def progress(msg: str) -> None:
             bar.set_postfix_str(msg[:40])
@@ -145,6 +146,11 @@ def run(args: argparse.Namespace) -> int:
               f"{cold_start_s(garage.map_path, garage.start, garage.goal):.2f} s")
     csv_path, png_path = args.csv or "bench.csv", args.png or "bench.png"
     write_csv(rows, csv_path)
-    plot_bench(rows, png_path)
+    budgets = {"ompl-BIT*": args.ompl_time, "ompl-RRT*": args.rrt_time}
+    title = (f"sphereplan bench: {robot.name}, {len(problems)} shipped problems "
+             f"({sum(not p.solvable for p in problems)} unsolvable), Hybrid A* median of {args.runs} runs"
+             + (f", BIT* {args.ompl_time:g} s" if args.ompl_time > 0 else "")
+             + (f", RRT* {args.rrt_time:g} s" if args.rrt_time > 0 else ""))
+    plot_bench(rows, png_path, title, args.runs, budgets)
     print(f"wrote {csv_path} and {png_path}")
     return 0

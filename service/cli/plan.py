@@ -78,6 +78,16 @@ def _pose(p: tuple[float, float, float]) -> dict[str, float]:
     return {"x": p[0], "y": p[1], "yaw": p[2]}
 
 
+def _failure_words(exc: PlanningError) -> str:
+    """What went wrong, in the words a plot title can carry."""
+    from planner.errors import GoalOccupied, GoalOutsideMap, PlannerTimedOut, StartOccupied, StartOutsideMap
+
+    words = {StartOutsideMap: "start outside the map", GoalOutsideMap: "goal outside the map",
+             StartOccupied: "start in collision", GoalOccupied: "goal in collision",
+             PlannerTimedOut: "timed out"}
+    return next((w for cls, w in words.items() if isinstance(exc, cls)), "no path exists")
+
+
 def run(args: argparse.Namespace) -> int:
     from planner.hybrid_astar.plot import plot_plan
     from planner.result import failure_json
@@ -103,7 +113,7 @@ def run(args: argparse.Namespace) -> int:
                             grid))
             if args.plot:
                 stages.start("plot")
-                title = f"{grid.name}: no path ({exc.code})"
+                title = f"{grid.name}: {robot.name}, no path: {_failure_words(exc)} (code {exc.code})"
                 write_file(args.plot, "--plot",
                            lambda: plot_plan(grid, robot, None, query.start, query.goal, args.plot, title=title))
             raise

@@ -103,3 +103,42 @@ def test_version_flag_prints_the_package_version(capsys) -> None:
 
     assert main(["--version"]) == 0
     assert capsys.readouterr().out.strip() == f"sphereplan {planner.__version__}"
+
+
+@pytest.mark.parametrize(
+    ("endpoints", "exit_code", "words"),
+    [
+        (["--start", "12", "8.05", "0", "--goal", "12", "16.0", "1.57"], 2, "goal in collision"),
+        (["--start", "-50", "8.05", "0", "--goal", "12", "8.05", "0"], 2, "start outside the map"),
+        (["--start", "20", "23.55", "0", "--goal", "12.5", "28.3", "0"], 3, "no path exists"),
+    ],
+)
+def test_failed_plan_still_writes_the_plot(capsys, tmp_path, monkeypatch, endpoints, exit_code, words):
+    """Issue #13: --plot on exit 2/3 draws start and goal footprints, the colliding one red with its cells."""
+    from planner.hybrid_astar import plot as plan_plot
+    from planner.plotstyle import legend_labels
+
+    figures = []
+    make = plan_plot.plan_figure
+
+    def keep(*args, **kwargs):
+        figures.append(make(*args, **kwargs))
+        return figures[-1]
+
+    monkeypatch.setattr(plan_plot, "plan_figure", keep)
+    png = tmp_path / "fail.png"
+    code, _, _ = run(capsys, "plan", "--map", GARAGE, *endpoints, "--plot", str(png))
+    assert code == exit_code and png.stat().st_size > 10_000
+    fig = figures[-1]
+    labels = legend_labels(fig)
+    assert words in fig.axes[0].get_title()
+    assert {"free", "occupied", "unknown (blocked)"} <= set(labels)
+    assert any(label.startswith("start footprint") for label in labels)
+    assert any(label.startswith("goal footprint") for label in labels)
+    if words == "goal in collision":
+        assert "goal footprint (in collision)" in labels
+        assert any(label.startswith("blocked cells it overlaps") for label in labels)
+    if words == "start outside the map":
+        assert "start footprint (outside the map)" in labels and "outside the map" in labels
+    if exit_code == 3:
+        assert not any("in collision" in label for label in labels)

@@ -54,6 +54,25 @@ def test_json_on_stdout_stays_clean_and_q_silences_stderr(capsys: pytest.Capture
     assert capsys.readouterr().err == ""
 
 
+def test_talk_flags_after_a_sub_verb_work_like_before_the_verb(
+    capsys: pytest.CaptureFixture[str], tmp_path: Path
+) -> None:
+    """``sphereplan vpip schedule … -q`` (issue #13): the flags after the sub-verb, on every sub-verb."""
+    parser = build_parser()
+    for argv in (["vpip", "radius", "--roll", "10"], ["tensegrity", "static", "--theta1", "1", "--theta2", "1"],
+                 ["vpip", "schedule", "--path", "p.json", "--out", "s.json"],
+                 ["tensegrity", "gait", "--distance", "1", "--out", "g.json"]):
+        assert parser.parse_args([*argv, "-q"]).quiet is True
+        assert parser.parse_args([*argv, "-vv"]).verbose == 2
+        assert parser.parse_args(["-q", *argv]).quiet is True  # before the verb: unchanged
+        assert parser.parse_args(["-v", *argv]).verbose == 1  # a sub-verb's copy does not reset it
+    out = tmp_path / "g.json"
+    assert main(["tensegrity", "gait", "--distance", "0.3", "--steps", "4", "--out", str(out), "-q"]) == 0
+    assert capsys.readouterr().err == "" and out.is_file()
+    assert main(["tensegrity", "gait", "--distance", "0.3", "--steps", "4", "--out", str(out)]) == 0
+    assert "plan the gait" in capsys.readouterr().err
+
+
 def test_plan_degrees_reads_yaw_in_degrees() -> None:
     args = build_parser().parse_args(
         ["plan", "--map", "m.yaml", "--start", "0", "0", "90", "--goal", "1", "1", "-180", "--degrees"]

@@ -55,6 +55,8 @@ def test_gait_writes_json_and_plot(tmp_path: Path) -> None:
     )
     result = json.loads(out.read_text())
     assert result["net_displacement_m"] == pytest.approx(0.8)
+    # "forward 0.8 m" is towards +x in the world frame
+    assert result["steps"][-1]["centre_m"][0] - result["steps"][0]["centre_m"][0] == pytest.approx(0.8)
     assert result["state_sequence"][:2] == [1, 3]
     assert png.stat().st_size > 10_000
 
@@ -71,3 +73,22 @@ def test_formfind(capsys: pytest.CaptureFixture[str]) -> None:
     out = json.loads(capsys.readouterr().out)
     assert len(out["cables"]) == 12
     assert out["rotation_error_deg_vs_eq3"] < 1e-3
+
+
+def test_static_process_loads_no_scipy() -> None:
+    """``tensegrity static`` as a process stays under 1 s CPU: it must not import scipy, numba or matplotlib
+    (scipy.interpolate alone took ~0.4 s of start-up, via planner.robot)."""
+    import subprocess
+    import sys
+
+    repo = Path(__file__).resolve().parents[2]
+    code = (
+        "import sys, io, contextlib\n"
+        "from service.cli import main\n"
+        "with contextlib.redirect_stdout(io.StringIO()):\n"
+        "    assert main(['tensegrity', 'static', '--theta1', '60', '--theta2', '10', '--degrees']) == 0\n"
+        "heavy = {'scipy', 'numba', 'matplotlib', 'casadi'}\n"
+        "print(sorted(heavy & {m.split('.')[0] for m in sys.modules}))\n"
+    )
+    proc = subprocess.run([sys.executable, "-c", code], cwd=repo, capture_output=True, text=True, check=True)
+    assert proc.stdout.strip().splitlines()[-1] == "[]"

@@ -209,6 +209,29 @@ def test_summary_counts_and_medians() -> None:
         assert s.clearance_median_m == pytest.approx(0.3) and s.reported_clearance_median_m == pytest.approx(0.05)
 
 
+def test_real_figure_marks_unsolvable_and_explains_the_dashed_line() -> None:
+    """bench_real.png (issue #13): proved-unsolvable problems labelled, 1.05 line explained, legends outside."""
+    from planner.hybrid_astar.realbench import real_figure
+    from planner.plotstyle import legend_labels
+
+    records = with_reference_lengths([
+        _rec(0, SPHEREPLAN, "solved", 0.2, length=11.0, clear=0.3, reported=0.05),
+        _rec(0, BIT_DUBINS, "solved", 0.4, length=10.5),
+        _rec(1, SPHEREPLAN, "no_path", 0.5, disconnected=True),
+        _rec(1, BIT_DUBINS, "unsolved", 5.0, disconnected=True),
+    ], False)
+    fig = real_figure(records, [], "title")
+    labels = legend_labels(fig)
+    assert "5 % longer than the reference" in labels
+    assert any(label.startswith("unsolvable") for label in labels)
+    assert [t.get_text() for t in fig.axes[1].get_xticklabels()] == ["m#0", "m#1 (unsolvable)"]
+    fig.canvas.draw()
+    for ax in fig.axes:
+        legend = ax.get_legend()
+        if legend is not None:  # beside the axes, not over the data
+            assert legend.get_window_extent().x0 >= ax.get_window_extent().x1
+
+
 def test_refused_pose_that_truly_collides_is_not_counted_as_refused_free() -> None:
     occ = _room()
     occ[:, :30] = True  # a wall over x < 1.5 m: the goal at (1, 1) below is inside it

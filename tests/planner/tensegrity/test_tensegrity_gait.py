@@ -109,3 +109,13 @@ def test_slider_path_is_monotone_in_contact_angle() -> None:
 def test_bad_gait_input_names_the_field(kwargs: dict, field: str) -> None:
     with pytest.raises(InvalidInput, match=field):
         plan_gait(profile=PROFILE, **kwargs)
+
+
+@pytest.mark.parametrize("start_state", [1, 2, 3, 4])
+@pytest.mark.parametrize("distance", [1.0, -1.0, 0.4])
+def test_positive_distance_rolls_towards_plus_x(distance: float, start_state: int) -> None:
+    """Forward (distance > 0) advances O_b along +x, the reverse gait along −x (issue #13: it went −x)."""
+    result = plan_gait(distance, PROFILE, steps=8, start_state=start_state)
+    first, last = result["steps"][0]["centre_m"], result["steps"][-1]["centre_m"]
+    assert last[0] - first[0] == pytest.approx(distance, abs=1e-6)
+    assert result["heading_rad"] == pytest.approx(0.0 if distance > 0 else math.pi, abs=1e-9)
