@@ -66,13 +66,23 @@ def run_circle(
     omega_rad_s: float = 1.0,
     theta_vpip_rad: float | None = None,
     settle_s: float | None = None,
+    heading_rad: float = 0.0,
 ) -> dict[str, Any]:
     """Hold a desired roll (and ω, or a fixed θ_VPIP) for ``duration_s`` and fit the circle rolled.
 
     Returns ``summary`` (``diameter_m`` from the fit, ``diameter_from_heading_m``, ``turned_deg``, mean
     roll and ω after ``settle_s``, rod-rate statistics) and ``series`` (t, roll, ω, φ_VPIP, θ_VPIP, x, y,
     yaw, rod lengths commanded and measured). ``diameter_m`` is null when the track turned less than
-    45° (too little arc to fit a circle; a straight run).
+    45° (too little arc to fit a circle; a straight run). ``heading_rad`` is the start heading: on a flat
+    floor it changes nothing physical, only the rounding, so repeating a MuJoCo run at several headings
+    shows how much of a diameter is the run's chaotic detail (docs/vpip.md).
+
+    On the MuJoCo plant the summary also splits the turning into its kinematic parts (the sphere's world
+    angular velocity Ω): ``mean_spin_rad_s`` (Ω_z, spin about the contact normal, > 0 turns left),
+    ``mean_no_spin_yaw_rate_rad_s`` (ω_h·tan(roll), ω_h the rolling rate about the axle's horizontal
+    direction: the heading rate without spin), so that yaw rate = spin + ω_h·tan(roll) exactly;
+    ``mean_yaw_rate_rad_s`` (the heading rate measured) and ``no_spin_diameter_m`` = 2·r_m / tan(mean
+    roll), the circle a non-spinning sphere rolls at the roll it actually held.
     """
     if driver not in DRIVERS:
         raise InvalidInput("driver", f"must be one of {', '.join(DRIVERS)}, got {driver!r}")
@@ -81,6 +91,8 @@ def run_circle(
     for name, value in (("roll", roll_rad), ("duration", duration_s), ("omega", omega_rad_s)):
         if not math.isfinite(value):
             raise InvalidInput(name, f"must be finite, got {value!r}")
+    if not math.isfinite(heading_rad):
+        raise InvalidInput("heading", f"must be finite, got {heading_rad!r}")
     if abs(roll_rad) > profile.max_roll_rad + 1e-12:
         raise InvalidInput(
             "roll", f"|roll| must be at most the profile's max roll {math.degrees(profile.max_roll_rad):.3g} deg"
@@ -99,7 +111,7 @@ def run_circle(
         )
     settle = min(5.0, 0.25 * duration_s) if settle_s is None else settle_s
     dt = 1.0 / rate_hz
-    sphere = make_plant(plant, profile, params, 0.0, 0.0, 0.0, roll_rad if plant == "surrogate" else 0.0)
+    sphere = make_plant(plant, profile, params, 0.0, 0.0, heading_rad, roll_rad if plant == "surrogate" else 0.0)
     roll_ctl = RollController(roll_gains, dt)
     pitch_ctl = PitchController(pitch_gains, dt)
     vpip = RodDriver(params, dt)
@@ -107,7 +119,7 @@ def run_circle(
     keys = ["t", "roll_rad", "omega_rad_s", "phi_vpip_rad", "theta_vpip_rad", "x", "y", "yaw", "rod_length_m"]
     mujoco = isinstance(sphere, MujocoSphere)
     if mujoco:
-        keys += ["rod_measured_m", "rods_on_ground"]
+        keys += ["rod_measured_m", "rods_on_ground", "spin_rad_s", "no_spin_yaw_rate_rad_s"]
     rec: dict[str, list[Any]] = {k: [] for k in keys}
     steps = round(duration_s / dt)
     for k in range(steps + 1):
@@ -138,6 +150,9 @@ def run_circle(
         if isinstance(sphere, MujocoSphere):
             rec["rod_measured_m"].append([float(v) for v in sphere.sim.rod_lengths_m()])
             rec["rods_on_ground"].append(int(sphere.sim.rods_on_ground().sum()))
+            w, tilt = sphere.sim.turn_rates()
+            rec["spin_rad_s"].append(w)
+            rec["no_spin_yaw_rate_rad_s"].append(tilt)
         if k < steps:
             sphere.step(phi_v, theta_v, lengths, dt)
     summary = _summary(rec, dt, settle, params.rod_speed_m_s)
@@ -150,6 +165,7 @@ def run_circle(
             "theta_vpip_fixed_deg": None if theta_vpip_rad is None else math.degrees(theta_vpip_rad),
             "duration_s": duration_s,
             "settle_s": settle,
+            "start_heading_rad": heading_rad,
             "commanded_rod_rate": rod_rate_stats(np.asarray(rec["rod_length_m"]), dt, params.rod_speed_m_s),
         }
     )
@@ -160,6 +176,11 @@ def run_circle(
         summary["max_rod_length_m"] = float(measured.max())
         summary["mean_rods_on_ground"] = float(np.mean(rec["rods_on_ground"]))
         summary["diameter_source"] = "MuJoCo rigid-body contact physics"
+        late = np.asarray(rec["t"]) >= settle
+        summary["mean_spin_rad_s"] = float(np.mean(np.asarray(rec["spin_rad_s"])[late]))
+        summary["mean_no_spin_yaw_rate_rad_s"] = float(np.mean(np.asarray(rec["no_spin_yaw_rate_rad_s"])[late]))
+        held = math.radians(abs(summary["mean_roll_deg"]))
+        summary["no_spin_diameter_m"] = 2.0 * params.r_m / math.tan(held) if held > 1e-6 else None
     else:
         summary["diameter_source"] = "surrogate: the profile's roll model (table), not physics"
     paper = PAPER_DIAMETERS_M.get(round(abs(math.degrees(roll_rad)), 6))
@@ -199,6 +220,7 @@ def _summary(rec: dict[str, list[Any]], dt: float, settle_s: float, rod_speed: f
         "turned_deg": math.degrees(turned),
         "path_length_m": path,
         "mean_speed_m_s": path / float(t[late][-1] - t[late][0]),
+        "mean_yaw_rate_rad_s": turned / float(t[late][-1] - t[late][0]),
         "mean_roll_deg": math.degrees(float(np.mean(roll))),
         "std_roll_deg": math.degrees(float(np.std(roll))),
         "mean_omega_rad_s": float(np.mean(omega)),

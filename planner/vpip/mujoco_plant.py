@@ -156,6 +156,26 @@ class MujocoPlant:
                     out[self._tip_geoms[g]] = True
         return out
 
+    def world_angular_velocity(self) -> np.ndarray:
+        """The sphere's angular velocity in the world frame (rad/s), shape ``(3,)``."""
+        rot = np.asarray(self.data.xmat[self._body_id], dtype=float).reshape(3, 3)
+        return np.asarray(rot @ self.data.qvel[3:6], dtype=float)
+
+    def turn_rates(self) -> tuple[float, float]:
+        """The heading rate split into (spin Ω_z, tilt term ω_h·tan(roll)) in rad/s, > 0 turning left.
+
+        Kinematics of the axle ``a`` (body x) under ``ȧ = Ω × a``: its heading turns at
+        ``ψ̇ = Ω_z − a_z·(Ω·a_h)/|a_h|²`` (``a_h`` its horizontal part), i.e. the spin about the contact
+        normal plus ``ω_h·tan(roll)``, ``ω_h = −Ω·a_h/|a_h|`` the rolling rate about the horizontal axle.
+        With no spin and no slip (speed r·ω_h) the circle is ``r / tan(roll)``: nothing a rod does can roll
+        a tighter circle at a given held roll unless the sphere spins (docs/vpip.md).
+        """
+        w = self.world_angular_velocity()
+        a = np.asarray(self.data.xmat[self._body_id], dtype=float).reshape(3, 3)[:, 0]
+        h2 = float(a[0] ** 2 + a[1] ** 2)
+        tilt = -float(a[2]) * float(w[0] * a[0] + w[1] * a[1]) / h2 if h2 > 1e-12 else 0.0
+        return float(w[2]), tilt
+
     def observe(self) -> Observation:
         d = self.data
         xmat = d.xmat[self._body_id]
