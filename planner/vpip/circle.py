@@ -122,6 +122,9 @@ def run_circle(
         keys += ["rod_measured_m", "rods_on_ground", "spin_rad_s", "no_spin_yaw_rate_rad_s"]
     rec: dict[str, list[Any]] = {k: [] for k in keys}
     steps = round(duration_s / dt)
+    roll_sat: list[bool] = []
+    roll_int: list[float] = []
+    roll_d: list[float] = []
     for k in range(steps + 1):
         obs = sphere.observe()
         if driver == "vpip":
@@ -130,6 +133,9 @@ def run_circle(
                 pitch_ctl.command(obs.omega_rad_s, omega_rad_s) if theta_vpip_rad is None else theta_vpip_rad
             )
             vpip.step(phi_v, theta_v, obs.roll_rad, obs.phase_rad)
+            roll_sat.append(roll_ctl.saturated)
+            roll_int.append(roll_ctl.integral)
+            roll_d.append(roll_ctl.gains.kd * roll_ctl.derivative)
             lengths = vpip.lengths_m
         else:
             simple.step(obs.roll_rad, roll_rad, obs.phase_rad)
@@ -183,6 +189,16 @@ def run_circle(
         summary["no_spin_diameter_m"] = 2.0 * params.r_m / math.tan(held) if held > 1e-6 else None
     else:
         summary["diameter_source"] = "surrogate: the profile's roll model (table), not physics"
+    if roll_sat:
+        n_late = len(roll_sat) - int(settle / dt)
+        if n_late > 0:
+            late_int = np.abs(roll_int[-n_late:])
+            summary["roll_pid"] = {
+                "output_saturated_fraction": float(np.mean(roll_sat[-n_late:])),
+                "integral_at_limit_fraction": float(np.mean(late_int >= roll_gains.integral_limit * (1 - 1e-9))),
+                "mean_integral_deg": math.degrees(float(np.mean(roll_int[-n_late:]))),
+                "rms_derivative_part_deg": math.degrees(float(np.sqrt(np.mean(np.square(roll_d[-n_late:]))))),
+            }
     paper = PAPER_DIAMETERS_M.get(round(abs(math.degrees(roll_rad)), 6))
     summary["paper_diameter_m"] = paper
     if paper is not None and summary["diameter_m"] is not None:
