@@ -75,6 +75,7 @@ VARIANTS: dict[str, dict[str, float]] = {
     "rod feet no-slip (friction 100), shell unchanged": {"rod_tip_friction": 100.0},
     "roll k_d 0.5 (D part below the 20 deg limit at rod-driven roll rates)": {"roll_kd": 0.5},
     "roll anti-windup 10 deg (= k_i x 5 deg, the other reading of Table 1)": {"roll_integral_limit_deg": 10.0},
+    "roll k_d 0.5 and anti-windup 10 deg (roll held closer)": {"roll_kd": 0.5, "roll_integral_limit_deg": 10.0},
 }
 """Variants of the ``[vpip]`` section measured beside the default (keys override the profile's)."""
 
@@ -144,9 +145,11 @@ def _diameter_figure(report: dict[str, Any], out: Path) -> None:
                 continue
             ax.errorbar(roll + dx, st["median"], yerr=[[st["median"] - st["min"]], [st["max"] - st["median"]]],
                         fmt=mark, capsize=3, label=label if i == 0 else None)
+    held = [ens[f"{r:g}"]["no_spin_diameter_m"]["median"] for r in rolls]
+    ax.plot(rolls, held, "kD", mfc="none", ms=7, label="default: 2r / tan(roll actually held), median")
     for j, (name, res) in enumerate(report["variants"].items()):
         med = [res[f"{r:g}"]["diameter_m"]["median"] if res[f"{r:g}"]["diameter_m"] else np.nan for r in rolls]
-        ax.plot(rolls + 0.25 + 0.1 * j, med, "x", color=f"C{j + 4}", ms=7, label=f"{name[:60]}: fit, median")
+        ax.plot(rolls + 0.25 + 0.1 * j, med, "x", color=f"C{j + 4}", ms=7, label=f"{name[:70]}: fit, median")
     ax.set_xlabel("desired roll (deg)")
     ax.set_ylabel("circle diameter (m)")
     ax.set_ylim(0, 11)
