@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import mujoco
@@ -120,6 +121,24 @@ def test_the_turn_is_the_tilt_of_a_rolling_sphere_not_spin(short_circles: dict[i
         assert s["mean_speed_m_s"] == pytest.approx(P.r_m * s["mean_omega_rad_s"], rel=0.35)
     s15 = short_circles[15]
     assert 2.0 * s15["mean_speed_m_s"] / s15["mean_yaw_rate_rad_s"] > 0.8 * s15["no_spin_diameter_m"]
+
+
+GAZEBO_CONTACT = {"ground_friction": 100.0, "rod_tip_friction": 100.0, "ground_torsional_friction_m": 0.0}
+"""docs/vpip.md: the paper's simulator's contact (Table 1's no-slip friction, a point contact without spin friction)."""
+
+
+def test_with_the_paper_simulators_contact_15deg_spins_into_the_turn_and_lands_near_the_paper() -> None:
+    """docs/vpip.md: with no-slip contacts and no spin friction the sphere spins with the turn (Ω_z > 0), which
+    is what lets a circle be tighter than 2r/tan(roll); at 15° the fitted circle is then within 30 % of the
+    paper's 1.7 m (12 s run, 9 s fitted: a short window, so the band is the issue's 30 %, not tighter)."""
+    extra = dict(DAEDALUS.extra)
+    extra["vpip"] = {**dict(extra["vpip"]), **GAZEBO_CONTACT}
+    profile = dataclasses.replace(DAEDALUS, extra=extra)
+    s = run_circle(profile, math.radians(15), duration_s=12.0, settle_s=3.0)["summary"]
+    assert s["mean_spin_rad_s"] > 0.005
+    assert s["mean_yaw_rate_rad_s"] > s["mean_no_spin_yaw_rate_rad_s"]
+    assert s["diameter_m"] is not None
+    assert 0.7 * 1.7 <= s["diameter_m"] <= 1.3 * 1.7
 
 
 def test_table1_roll_pid_rides_its_limits_on_the_rod_physics(short_circles: dict[int, dict]) -> None:
