@@ -79,6 +79,15 @@ VARIANTS: dict[str, dict[str, float]] = {
 }
 """Variants of the ``[vpip]`` section measured beside the default (keys override the profile's)."""
 
+SHORT = {
+    "ground_friction": "μ shell",
+    "rod_tip_friction": "μ feet",
+    "ground_torsional_friction_m": "spin fr.",
+    "roll_kd": "roll k_d",
+    "roll_integral_limit_deg": "roll AW°",
+}
+"""Legend abbreviations of the override keys."""
+
 
 def _with_vpip(profile: RobotProfile, overrides: dict[str, float]) -> RobotProfile:
     extra = dict(profile.extra)
@@ -149,7 +158,9 @@ def _diameter_figure(report: dict[str, Any], out: Path) -> None:
     ax.plot(rolls, held, "kD", mfc="none", ms=7, label="default: 2r / tan(roll actually held), median")
     for j, (name, res) in enumerate(report["variants"].items()):
         med = [res[f"{r:g}"]["diameter_m"]["median"] if res[f"{r:g}"]["diameter_m"] else np.nan for r in rolls]
-        ax.plot(rolls + 0.25 + 0.1 * j, med, "x", color=f"C{j + 4}", ms=7, label=f"{name[:70]}: fit, median")
+        over = report["variant_overrides"][name]
+        short = ", ".join(f"{SHORT.get(k, k)} {v:g}" for k, v in over.items())
+        ax.plot(rolls + 0.25 + 0.1 * j, med, "x", color=f"C{j + 4}", ms=7, label=f"variant {short}: fit, median")
     ax.set_xlabel("desired roll (deg)")
     ax.set_ylabel("circle diameter (m)")
     ax.set_ylim(0, 11)
@@ -180,7 +191,11 @@ def main() -> None:
     ap.add_argument("--out", default="docs/img")
     ap.add_argument("--duration", type=float, default=30.0, help="seconds per circle (paper: 30)")
     ap.add_argument("--problem", default="cave_first_bend")
+    ap.add_argument("--replot", action="store_true", help="only redraw vpip-mujoco-diameters.png from the JSON")
     args = ap.parse_args()
+    if args.replot:
+        _diameter_figure(json.loads((Path(args.out) / "vpip-mujoco.json").read_text()), Path(args.out))
+        return
     logging.basicConfig(level=logging.INFO, format="%(message)s")
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
