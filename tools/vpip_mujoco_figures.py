@@ -126,6 +126,8 @@ def _ensemble(profile: RobotProfile, duration: float, headings: tuple[float, ...
             for h in headings
         ]
         out[f"{roll:g}"] = _stats(runs)
+        out[f"{roll:g}"]["rod_feet_first_heading"] = runs[0].get("rod_feet")
+        out[f"{roll:g}"]["roll_pid_first_heading"] = runs[0].get("roll_pid")
         log.info("ensemble roll %g: %s", roll, out[f"{roll:g}"]["diameter_m"])
     return out
 

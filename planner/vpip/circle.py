@@ -122,6 +122,7 @@ def run_circle(
         keys += ["rod_measured_m", "rods_on_ground", "spin_rad_s", "no_spin_yaw_rate_rad_s"]
     rec: dict[str, list[Any]] = {k: [] for k in keys}
     steps = round(duration_s / dt)
+    feet = _FootStats(params.rods_per_side)
     roll_sat: list[bool] = []
     roll_int: list[float] = []
     roll_d: list[float] = []
@@ -159,6 +160,8 @@ def run_circle(
             w, tilt = sphere.sim.turn_rates()
             rec["spin_rad_s"].append(w)
             rec["no_spin_yaw_rate_rad_s"].append(tilt)
+            if k * dt >= settle:
+                feet.tick(sphere.sim, obs, roll_rad)
         if k < steps:
             sphere.step(phi_v, theta_v, lengths, dt)
     summary = _summary(rec, dt, settle, params.rod_speed_m_s)
@@ -182,6 +185,7 @@ def run_circle(
         summary["max_rod_length_m"] = float(measured.max())
         summary["mean_rods_on_ground"] = float(np.mean(rec["rods_on_ground"]))
         summary["diameter_source"] = "MuJoCo rigid-body contact physics"
+        summary["rod_feet"] = feet.summary()
         late = np.asarray(rec["t"]) >= settle
         summary["mean_spin_rad_s"] = float(np.mean(np.asarray(rec["spin_rad_s"])[late]))
         summary["mean_no_spin_yaw_rate_rad_s"] = float(np.mean(np.asarray(rec["no_spin_yaw_rate_rad_s"])[late]))
@@ -212,6 +216,65 @@ def run_circle(
         "summary": summary,
         "series": rec,
     }
+
+
+class _FootStats:
+    """Where and how the rod feet touch the floor during a circle run (docs/vpip.md, hypothesis a).
+
+    Per control tick after settling: every foot contact's offset from the shell's contact (the point under
+    the centre) in the heading frame (``lateral_m`` > 0 right, ``forward_m`` > 0 ahead), the force on the
+    robot (normal, forward, ``inward_n``: lateral, towards the centre-line), whether the foot slides
+    (> 1 cm/s), and the yaw moment of the foot forces about the shell's contact (N m, > 0 turns left),
+    split into the feet on the low side of the lean (the side of the desired roll) and the high side.
+    """
+
+    def __init__(self, rods_per_side: int) -> None:
+        self.n = rods_per_side
+        self.ticks = 0
+        self.ticks_with_contact = 0
+        self.rows: dict[str, list[tuple[float, float, float, float, float, float, float]]] = {"low": [], "high": []}
+
+    def tick(self, sim: Any, obs: Any, desired_roll_rad: float) -> None:
+        self.ticks += 1
+        contacts = sim.foot_contacts()
+        if contacts:
+            self.ticks_with_contact += 1
+        fwd = np.array([math.cos(obs.yaw), math.sin(obs.yaw)])
+        right = np.array([math.sin(obs.yaw), -math.cos(obs.yaw)])
+        centre = np.array([obs.x, obs.y])
+        for rod, pos, force, slip in contacts:
+            rel = pos[:2] - centre
+            lat, ahead = float(rel @ right), float(rel @ fwd)
+            f_fwd, f_right = float(force[:2] @ fwd), float(force[:2] @ right)
+            left = rod < self.n
+            low = left if desired_roll_rad >= 0 else not left
+            inward = -f_right if lat > 0 else f_right
+            moment = lat * f_fwd - ahead * f_right
+            self.rows["low" if low else "high"].append(
+                (lat, ahead, float(force[2]), f_fwd, inward, 1.0 if slip > 0.01 else 0.0, moment)
+            )
+
+    def summary(self) -> dict[str, Any]:
+        out: dict[str, Any] = {
+            "ticks_with_a_foot_down_fraction": self.ticks_with_contact / self.ticks if self.ticks else None
+        }
+        for side, rows in self.rows.items():
+            if not rows:
+                out[side] = None
+                continue
+            a = np.asarray(rows)
+            w = np.maximum(a[:, 2], 0.0)
+            out[side] = {
+                "contact_ticks": len(rows),
+                "mean_lateral_m": float(a[:, 0].mean()),
+                "mean_forward_m": float(a[:, 1].mean()),
+                "mean_normal_n": float(a[:, 2].mean()),
+                "mean_forward_force_n": float(a[:, 3].mean()),
+                "mean_inward_force_n": float(a[:, 4].mean()),
+                "sliding_force_weighted_fraction": float(np.sum(w * a[:, 5]) / np.sum(w)) if w.sum() > 0 else None,
+                "yaw_moment_time_mean_n_m": float(a[:, 6].sum() / self.ticks),
+            }
+        return out
 
 
 def _summary(rec: dict[str, list[Any]], dt: float, settle_s: float, rod_speed: float) -> dict[str, Any]:

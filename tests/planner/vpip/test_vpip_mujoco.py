@@ -120,6 +120,11 @@ def test_the_turn_is_the_tilt_of_a_rolling_sphere_not_spin(short_circles: dict[i
         # the shell rolls, it does not skid: the centre moves at about r·ω (lateral rocking adds a little)
         assert s["mean_speed_m_s"] == pytest.approx(P.r_m * s["mean_omega_rad_s"], rel=0.35)
     s15 = short_circles[15]
+    # hypothesis (a) of docs/vpip.md: the rod feet do reach the floor, beside and behind the shell's contact
+    feet = s15["rod_feet"]
+    assert 0.05 < feet["ticks_with_a_foot_down_fraction"] < 0.6
+    assert feet["low"]["mean_lateral_m"] < -0.1 and feet["high"]["mean_lateral_m"] > 0.1  # leaning left
+    assert feet["low"]["mean_forward_m"] < 0 and feet["high"]["mean_forward_m"] < 0
     assert 2.0 * s15["mean_speed_m_s"] / s15["mean_yaw_rate_rad_s"] > 0.8 * s15["no_spin_diameter_m"]
 
 
