@@ -243,14 +243,18 @@ def circle_report(
     driver: str = "vpip",
     omega_rad_s: float = 1.0,
     theta_vpip_rad: float | None = None,
+    heading_rad: float = 0.0,
 ) -> dict[str, Any]:
-    """Hold a roll and fit the circle rolled (``sphereplan vpip circle``; the full time series)."""
+    """Hold a roll and fit the circle rolled (``sphereplan vpip circle``; the full time series).
+
+    ``heading_rad`` is the start heading (repeat runs: docs/vpip.md, "Held-roll circles")."""
     profile = robot if isinstance(robot, RobotProfile) else load_robot(robot)
     roll = _finite("roll", roll_rad)
     duration = _finite("duration", duration_s)
     omega = _finite("omega", omega_rad_s)
     theta = None if theta_vpip_rad is None else _finite("theta_vpip", theta_vpip_rad)
-    return run_circle(profile, roll, duration, plant, driver, omega, theta)
+    heading = _finite("heading", heading_rad)
+    return run_circle(profile, roll, duration, plant, driver, omega, theta, heading_rad=heading)
 
 
 def calibrate_by_simulation(

@@ -66,13 +66,23 @@ def run_circle(
     omega_rad_s: float = 1.0,
     theta_vpip_rad: float | None = None,
     settle_s: float | None = None,
+    heading_rad: float = 0.0,
 ) -> dict[str, Any]:
     """Hold a desired roll (and ω, or a fixed θ_VPIP) for ``duration_s`` and fit the circle rolled.
 
     Returns ``summary`` (``diameter_m`` from the fit, ``diameter_from_heading_m``, ``turned_deg``, mean
     roll and ω after ``settle_s``, rod-rate statistics) and ``series`` (t, roll, ω, φ_VPIP, θ_VPIP, x, y,
     yaw, rod lengths commanded and measured). ``diameter_m`` is null when the track turned less than
-    45° (too little arc to fit a circle; a straight run).
+    45° (too little arc to fit a circle; a straight run). ``heading_rad`` is the start heading: on a flat
+    floor it changes nothing physical, only the rounding, so repeating a MuJoCo run at several headings
+    shows how much of a diameter is the run's chaotic detail (docs/vpip.md).
+
+    On the MuJoCo plant the summary also splits the turning into its kinematic parts (the sphere's world
+    angular velocity Ω): ``mean_spin_rad_s`` (Ω_z, spin about the contact normal, > 0 turns left),
+    ``mean_no_spin_yaw_rate_rad_s`` (ω_h·tan(roll), ω_h the rolling rate about the axle's horizontal
+    direction: the heading rate without spin), so that yaw rate = spin + ω_h·tan(roll) exactly;
+    ``mean_yaw_rate_rad_s`` (the heading rate measured) and ``no_spin_diameter_m`` = 2·r_m / tan(mean
+    roll), the circle a non-spinning sphere rolls at the roll it actually held.
     """
     if driver not in DRIVERS:
         raise InvalidInput("driver", f"must be one of {', '.join(DRIVERS)}, got {driver!r}")
@@ -81,6 +91,8 @@ def run_circle(
     for name, value in (("roll", roll_rad), ("duration", duration_s), ("omega", omega_rad_s)):
         if not math.isfinite(value):
             raise InvalidInput(name, f"must be finite, got {value!r}")
+    if not math.isfinite(heading_rad):
+        raise InvalidInput("heading", f"must be finite, got {heading_rad!r}")
     if abs(roll_rad) > profile.max_roll_rad + 1e-12:
         raise InvalidInput(
             "roll", f"|roll| must be at most the profile's max roll {math.degrees(profile.max_roll_rad):.3g} deg"
@@ -99,7 +111,7 @@ def run_circle(
         )
     settle = min(5.0, 0.25 * duration_s) if settle_s is None else settle_s
     dt = 1.0 / rate_hz
-    sphere = make_plant(plant, profile, params, 0.0, 0.0, 0.0, roll_rad if plant == "surrogate" else 0.0)
+    sphere = make_plant(plant, profile, params, 0.0, 0.0, heading_rad, roll_rad if plant == "surrogate" else 0.0)
     roll_ctl = RollController(roll_gains, dt)
     pitch_ctl = PitchController(pitch_gains, dt)
     vpip = RodDriver(params, dt)
@@ -107,9 +119,13 @@ def run_circle(
     keys = ["t", "roll_rad", "omega_rad_s", "phi_vpip_rad", "theta_vpip_rad", "x", "y", "yaw", "rod_length_m"]
     mujoco = isinstance(sphere, MujocoSphere)
     if mujoco:
-        keys += ["rod_measured_m", "rods_on_ground"]
+        keys += ["rod_measured_m", "rods_on_ground", "spin_rad_s", "no_spin_yaw_rate_rad_s"]
     rec: dict[str, list[Any]] = {k: [] for k in keys}
     steps = round(duration_s / dt)
+    feet = _FootStats(params.rods_per_side)
+    roll_sat: list[bool] = []
+    roll_int: list[float] = []
+    roll_d: list[float] = []
     for k in range(steps + 1):
         obs = sphere.observe()
         if driver == "vpip":
@@ -118,6 +134,9 @@ def run_circle(
                 pitch_ctl.command(obs.omega_rad_s, omega_rad_s) if theta_vpip_rad is None else theta_vpip_rad
             )
             vpip.step(phi_v, theta_v, obs.roll_rad, obs.phase_rad)
+            roll_sat.append(roll_ctl.saturated)
+            roll_int.append(roll_ctl.integral)
+            roll_d.append(roll_ctl.gains.kd * roll_ctl.derivative)
             lengths = vpip.lengths_m
         else:
             simple.step(obs.roll_rad, roll_rad, obs.phase_rad)
@@ -138,6 +157,11 @@ def run_circle(
         if isinstance(sphere, MujocoSphere):
             rec["rod_measured_m"].append([float(v) for v in sphere.sim.rod_lengths_m()])
             rec["rods_on_ground"].append(int(sphere.sim.rods_on_ground().sum()))
+            w, tilt = sphere.sim.turn_rates()
+            rec["spin_rad_s"].append(w)
+            rec["no_spin_yaw_rate_rad_s"].append(tilt)
+            if k * dt >= settle:
+                feet.tick(sphere.sim, obs, roll_rad)
         if k < steps:
             sphere.step(phi_v, theta_v, lengths, dt)
     summary = _summary(rec, dt, settle, params.rod_speed_m_s)
@@ -150,6 +174,7 @@ def run_circle(
             "theta_vpip_fixed_deg": None if theta_vpip_rad is None else math.degrees(theta_vpip_rad),
             "duration_s": duration_s,
             "settle_s": settle,
+            "start_heading_rad": heading_rad,
             "commanded_rod_rate": rod_rate_stats(np.asarray(rec["rod_length_m"]), dt, params.rod_speed_m_s),
         }
     )
@@ -160,8 +185,24 @@ def run_circle(
         summary["max_rod_length_m"] = float(measured.max())
         summary["mean_rods_on_ground"] = float(np.mean(rec["rods_on_ground"]))
         summary["diameter_source"] = "MuJoCo rigid-body contact physics"
+        summary["rod_feet"] = feet.summary()
+        late = np.asarray(rec["t"]) >= settle
+        summary["mean_spin_rad_s"] = float(np.mean(np.asarray(rec["spin_rad_s"])[late]))
+        summary["mean_no_spin_yaw_rate_rad_s"] = float(np.mean(np.asarray(rec["no_spin_yaw_rate_rad_s"])[late]))
+        held = math.radians(abs(summary["mean_roll_deg"]))
+        summary["no_spin_diameter_m"] = 2.0 * params.r_m / math.tan(held) if held > 1e-6 else None
     else:
         summary["diameter_source"] = "surrogate: the profile's roll model (table), not physics"
+    if roll_sat:
+        n_late = len(roll_sat) - int(settle / dt)
+        if n_late > 0:
+            late_int = np.abs(roll_int[-n_late:])
+            summary["roll_pid"] = {
+                "output_saturated_fraction": float(np.mean(roll_sat[-n_late:])),
+                "integral_at_limit_fraction": float(np.mean(late_int >= roll_gains.integral_limit * (1 - 1e-9))),
+                "mean_integral_deg": math.degrees(float(np.mean(roll_int[-n_late:]))),
+                "rms_derivative_part_deg": math.degrees(float(np.sqrt(np.mean(np.square(roll_d[-n_late:]))))),
+            }
     paper = PAPER_DIAMETERS_M.get(round(abs(math.degrees(roll_rad)), 6))
     summary["paper_diameter_m"] = paper
     if paper is not None and summary["diameter_m"] is not None:
@@ -175,6 +216,65 @@ def run_circle(
         "summary": summary,
         "series": rec,
     }
+
+
+class _FootStats:
+    """Where and how the rod feet touch the floor during a circle run (docs/vpip.md, hypothesis a).
+
+    Per control tick after settling: every foot contact's offset from the shell's contact (the point under
+    the centre) in the heading frame (``lateral_m`` > 0 right, ``forward_m`` > 0 ahead), the force on the
+    robot (normal, forward, ``inward_n``: lateral, towards the centre-line), whether the foot slides
+    (> 1 cm/s), and the yaw moment of the foot forces about the shell's contact (N m, > 0 turns left),
+    split into the feet on the low side of the lean (the side of the desired roll) and the high side.
+    """
+
+    def __init__(self, rods_per_side: int) -> None:
+        self.n = rods_per_side
+        self.ticks = 0
+        self.ticks_with_contact = 0
+        self.rows: dict[str, list[tuple[float, float, float, float, float, float, float]]] = {"low": [], "high": []}
+
+    def tick(self, sim: Any, obs: Any, desired_roll_rad: float) -> None:
+        self.ticks += 1
+        contacts = sim.foot_contacts()
+        if contacts:
+            self.ticks_with_contact += 1
+        fwd = np.array([math.cos(obs.yaw), math.sin(obs.yaw)])
+        right = np.array([math.sin(obs.yaw), -math.cos(obs.yaw)])
+        centre = np.array([obs.x, obs.y])
+        for rod, pos, force, slip in contacts:
+            rel = pos[:2] - centre
+            lat, ahead = float(rel @ right), float(rel @ fwd)
+            f_fwd, f_right = float(force[:2] @ fwd), float(force[:2] @ right)
+            left = rod < self.n
+            low = left if desired_roll_rad >= 0 else not left
+            inward = -f_right if lat > 0 else f_right
+            moment = lat * f_fwd - ahead * f_right
+            self.rows["low" if low else "high"].append(
+                (lat, ahead, float(force[2]), f_fwd, inward, 1.0 if slip > 0.01 else 0.0, moment)
+            )
+
+    def summary(self) -> dict[str, Any]:
+        out: dict[str, Any] = {
+            "ticks_with_a_foot_down_fraction": self.ticks_with_contact / self.ticks if self.ticks else None
+        }
+        for side, rows in self.rows.items():
+            if not rows:
+                out[side] = None
+                continue
+            a = np.asarray(rows)
+            w = np.maximum(a[:, 2], 0.0)
+            out[side] = {
+                "contact_ticks": len(rows),
+                "mean_lateral_m": float(a[:, 0].mean()),
+                "mean_forward_m": float(a[:, 1].mean()),
+                "mean_normal_n": float(a[:, 2].mean()),
+                "mean_forward_force_n": float(a[:, 3].mean()),
+                "mean_inward_force_n": float(a[:, 4].mean()),
+                "sliding_force_weighted_fraction": float(np.sum(w * a[:, 5]) / np.sum(w)) if w.sum() > 0 else None,
+                "yaw_moment_time_mean_n_m": float(a[:, 6].sum() / self.ticks),
+            }
+        return out
 
 
 def _summary(rec: dict[str, list[Any]], dt: float, settle_s: float, rod_speed: float) -> dict[str, Any]:
@@ -199,6 +299,7 @@ def _summary(rec: dict[str, list[Any]], dt: float, settle_s: float, rod_speed: f
         "turned_deg": math.degrees(turned),
         "path_length_m": path,
         "mean_speed_m_s": path / float(t[late][-1] - t[late][0]),
+        "mean_yaw_rate_rad_s": turned / float(t[late][-1] - t[late][0]),
         "mean_roll_deg": math.degrees(float(np.mean(roll))),
         "std_roll_deg": math.degrees(float(np.std(roll))),
         "mean_omega_rad_s": float(np.mean(omega)),

@@ -156,6 +156,54 @@ class MujocoPlant:
                     out[self._tip_geoms[g]] = True
         return out
 
+    def foot_contacts(self) -> list[tuple[int, np.ndarray, np.ndarray, float]]:
+        """Rod feet on the floor now: (rod index, contact point, force on the robot, slip speed) per contact.
+
+        Point and force (N) are in the world frame; the slip speed (m/s) is the horizontal velocity of the
+        foot's material point at the contact (0 for a foot that holds).
+        """
+        mujoco = self._mj
+        m, d = self.model, self.data
+        out = []
+        f6 = np.zeros(6)
+        vel = np.zeros(6)
+        for i in range(d.ncon):
+            c = d.contact[i]
+            if c.geom1 == self._floor and c.geom2 in self._tip_geoms:
+                g, sign = c.geom2, 1.0
+            elif c.geom2 == self._floor and c.geom1 in self._tip_geoms:
+                g, sign = c.geom1, -1.0
+            else:
+                continue
+            mujoco.mj_contactForce(m, d, i, f6)
+            frame = np.asarray(c.frame, dtype=float).reshape(3, 3)
+            force = sign * (frame.T @ f6[:3])  # the force geom1 exerts on geom2, turned onto the foot
+            mujoco.mj_objectVelocity(m, d, mujoco.mjtObj.mjOBJ_GEOM, g, vel, 0)
+            pos = np.array(c.pos, dtype=float)
+            point = vel[3:] + np.cross(vel[:3], pos - d.geom_xpos[g])
+            out.append((self._tip_geoms[g], pos, force, float(math.hypot(point[0], point[1]))))
+        return out
+
+    def world_angular_velocity(self) -> np.ndarray:
+        """The sphere's angular velocity in the world frame (rad/s), shape ``(3,)``."""
+        rot = np.asarray(self.data.xmat[self._body_id], dtype=float).reshape(3, 3)
+        return np.asarray(rot @ self.data.qvel[3:6], dtype=float)
+
+    def turn_rates(self) -> tuple[float, float]:
+        """The heading rate split into (spin Ω_z, tilt term ω_h·tan(roll)) in rad/s, > 0 turning left.
+
+        Kinematics of the axle ``a`` (body x) under ``ȧ = Ω × a``: its heading turns at
+        ``ψ̇ = Ω_z − a_z·(Ω·a_h)/|a_h|²`` (``a_h`` its horizontal part), i.e. the spin about the contact
+        normal plus ``ω_h·tan(roll)``, ``ω_h = −Ω·a_h/|a_h|`` the rolling rate about the horizontal axle.
+        With no spin and no slip (speed r·ω_h) the circle is ``r / tan(roll)``: nothing a rod does can roll
+        a tighter circle at a given held roll unless the sphere spins (docs/vpip.md).
+        """
+        w = self.world_angular_velocity()
+        a = np.asarray(self.data.xmat[self._body_id], dtype=float).reshape(3, 3)[:, 0]
+        h2 = float(a[0] ** 2 + a[1] ** 2)
+        tilt = -float(a[2]) * float(w[0] * a[0] + w[1] * a[1]) / h2 if h2 > 1e-12 else 0.0
+        return float(w[2]), tilt
+
     def observe(self) -> Observation:
         d = self.data
         xmat = d.xmat[self._body_id]

@@ -105,7 +105,14 @@ def _circle(args: argparse.Namespace) -> int:
         raise InvalidInput("duration", f"must be in (0, 600] s, got {args.duration}")
     theta = None if args.theta_deg is None else math.radians(args.theta_deg)
     result = api.circle_report(
-        math.radians(args.roll_deg), args.robot, args.plant, args.duration, args.driver, args.omega, theta
+        math.radians(args.roll_deg),
+        args.robot,
+        args.plant,
+        args.duration,
+        args.driver,
+        args.omega,
+        theta,
+        heading_rad=math.radians(args.heading_deg),
     )
     emit_json(result, args.out)
     if args.plot:
@@ -219,6 +226,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--theta-deg",
         type=finite_float,
         help="hold theta_vpip fixed (deg, open loop as in Fig. 7) instead of the pitch PI",
+    )
+    circ.add_argument(
+        "--heading-deg",
+        type=finite_float,
+        default=0.0,
+        help="start heading (deg, default 0); repeat a MuJoCo run at other headings to see its spread",
     )
     common(circ)
     circ.set_defaults(func=_circle)

@@ -113,6 +113,19 @@ def test_circle_verb_and_calibrate_from_its_output(capsys: pytest.CaptureFixture
         assert summary["diameter_m"] == pytest.approx(want, rel=0.1)
         assert summary["commanded_rod_rate"]["max_m_s"] <= 0.1 + 1e-9
         outs.append(str(out))
+    # --heading-deg only turns the start: on the surrogate the same circle, started 90 deg to the left
+    out = tmp_path / "c15h.json"
+    code, turned = _run(
+        capsys,
+        [
+            *("vpip", "circle", "--roll-deg", "15", "--plant", "surrogate", "--duration", "20"),
+            *("--heading-deg", "90", "--out", str(out)),
+        ],
+    )
+    assert code == 0 and turned["start_heading_rad"] == pytest.approx(math.pi / 2)
+    assert turned["diameter_m"] == pytest.approx(summary["diameter_m"], rel=1e-6)
+    series = json.loads(out.read_text())["series"]
+    assert series["yaw"][0] == pytest.approx(math.pi / 2)
     prof = tmp_path / "cal.toml"
     code, cal = _run(capsys, ["vpip", "calibrate", "--circles", *outs, "--out", str(prof)])
     assert code == 0 and cal["roll_model"]["roll_deg"] == [5.0, 15.0]

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import mujoco
@@ -86,9 +87,15 @@ def test_rear_rods_extending_roll_the_sphere_forward() -> None:
     assert o.phase_rad * P.r_m == pytest.approx(np.linalg.norm(moved), rel=0.15)  # rolling, not sliding
 
 
-def test_held_roll_turns_the_right_way_and_tighter_with_more_roll() -> None:
+@pytest.fixture(scope="module")
+def short_circles() -> dict[int, dict]:
+    """9 s held-roll runs (3 s settling) at 5°, 15° and −15° on the MuJoCo plant, shared by the tests below."""
+    return {r: run_circle(DAEDALUS, math.radians(r), duration_s=9.0, settle_s=3.0)["summary"] for r in (5, 15, -15)}
+
+
+def test_held_roll_turns_the_right_way_and_tighter_with_more_roll(short_circles: dict[int, dict]) -> None:
     """A held roll > 0 turns left, < 0 right; 15° turns tighter than 5° (short runs, physics only)."""
-    runs = {r: run_circle(DAEDALUS, math.radians(r), duration_s=9.0, settle_s=3.0)["summary"] for r in (5, 15, -15)}
+    runs = short_circles
     k = {r: math.radians(s["turned_deg"]) / s["path_length_m"] for r, s in runs.items()}
     assert k[15] > 0 and k[5] > 0 and k[-15] < 0
     assert k[15] > 1.5 * k[5]
@@ -97,6 +104,59 @@ def test_held_roll_turns_the_right_way_and_tighter_with_more_roll() -> None:
         assert s["diameter_source"].startswith("MuJoCo")
         assert s["max_rod_length_m"] <= P.l_max + 1e-3  # slide-joint limit (soft constraint, < 1 mm)
         assert s["commanded_rod_rate"]["max_m_s"] <= P.rod_speed_m_s + 1e-9
+
+
+def test_the_turn_is_the_tilt_of_a_rolling_sphere_not_spin(short_circles: dict[int, dict]) -> None:
+    """docs/vpip.md "Why the circles are wider": heading rate = spin Ω_z + ω_h·tan(roll), and on the MuJoCo
+    plant the spin is small, so the circle is set by the roll held (≈ 2r/tan(roll), never much tighter)."""
+    for r, s in short_circles.items():
+        # the split is kinematics of the simulated body: it must add up to the measured heading rate
+        assert s["mean_yaw_rate_rad_s"] == pytest.approx(
+            s["mean_spin_rad_s"] + s["mean_no_spin_yaw_rate_rad_s"], abs=5e-3
+        )
+        tilt = s["mean_no_spin_yaw_rate_rad_s"]
+        assert math.copysign(1.0, tilt) == math.copysign(1.0, r)
+        assert abs(s["mean_spin_rad_s"]) < 0.3 * abs(tilt)  # spin would be what makes circles tighter
+        # the shell rolls, it does not skid: the centre moves at about r·ω (lateral rocking adds a little)
+        assert s["mean_speed_m_s"] == pytest.approx(P.r_m * s["mean_omega_rad_s"], rel=0.35)
+    s15 = short_circles[15]
+    # hypothesis (a) of docs/vpip.md: the rod feet do reach the floor, beside and behind the shell's contact
+    feet = s15["rod_feet"]
+    assert 0.05 < feet["ticks_with_a_foot_down_fraction"] < 0.6
+    assert feet["low"]["mean_lateral_m"] < -0.1 and feet["high"]["mean_lateral_m"] > 0.1  # leaning left
+    assert feet["low"]["mean_forward_m"] < 0 and feet["high"]["mean_forward_m"] < 0
+    assert 2.0 * s15["mean_speed_m_s"] / s15["mean_yaw_rate_rad_s"] > 0.8 * s15["no_spin_diameter_m"]
+
+
+GAZEBO_CONTACT = {"ground_friction": 100.0, "rod_tip_friction": 100.0, "ground_torsional_friction_m": 0.0}
+"""docs/vpip.md: the paper's simulator's contact (Table 1's no-slip friction, a point contact without spin friction)."""
+
+
+def test_with_the_paper_simulators_contact_15deg_spins_into_the_turn_and_lands_near_the_paper() -> None:
+    """docs/vpip.md: with no-slip contacts and no spin friction the sphere spins with the turn (Ω_z > 0), which
+    is what lets a circle be tighter than 2r/tan(roll); at 15° the fitted circle is then within 30 % of the
+    paper's 1.7 m (12 s run, 9 s fitted: a short window, so the band is the issue's 30 %, not tighter)."""
+    extra = dict(DAEDALUS.extra)
+    extra["vpip"] = {**dict(extra["vpip"]), **GAZEBO_CONTACT}
+    profile = dataclasses.replace(DAEDALUS, extra=extra)
+    s = run_circle(profile, math.radians(15), duration_s=12.0, settle_s=3.0)["summary"]
+    assert s["mean_spin_rad_s"] > 0.005
+    assert s["mean_yaw_rate_rad_s"] > s["mean_no_spin_yaw_rate_rad_s"]
+    assert s["diameter_m"] is not None
+    assert 0.7 * 1.7 <= s["diameter_m"] <= 1.3 * 1.7
+
+
+def test_table1_roll_pid_rides_its_limits_on_the_rod_physics(short_circles: dict[int, dict]) -> None:
+    """docs/vpip.md: why the roll is held short. A rod pivoting the sphere rolls it at ~rod speed / lever
+    (0.1 / 0.2 m ≈ 0.5 rad/s); k_d = 3.5 turns that into far more than the ±20° output limit, so φ_VPIP
+    mostly sits at a limit, and the integral part that should remove the steady error sits at its 5° limit."""
+    for r in (15, -15):
+        s = short_circles[r]
+        pid = s["roll_pid"]
+        assert pid["output_saturated_fraction"] > 0.5
+        assert pid["rms_derivative_part_deg"] > 20.0
+        assert pid["integral_at_limit_fraction"] > 0.5
+        assert abs(s["mean_roll_deg"]) < abs(r) - 2.0  # held short of the target
 
 
 def test_mujoco_schedule_keeps_rods_within_limits_and_follows_an_arc() -> None:
