@@ -4,8 +4,9 @@
   LMPC (eq. 20–25) or the PID; velocity, pendulum pitch and torque over time.
 * :func:`roll_step` — Fig. 13: rolling straight at V (speed held by the LMPC in both cases), a roll step
   to φ_d at t = 0 under the RSLQR (eq. 26–32) or the PID.
-* :func:`step_metrics` — rise time (10 → 90 % of the step), overshoot (fraction of the step), settling
-  time (last exit from a ±5 % band) and steady-state error (mean over the last second).
+* :func:`step_metrics` — rise time (10 → 90 % of the step, crossings interpolated between samples),
+  overshoot (fraction of the step), settling time (last exit from a ±5 % band) and steady-state error
+  (mean over the last second).
 * :func:`tune_pid` — how the baselines were tuned (docs/pendulum.md): all gains of the double-loop PID
   by a seeded differential evolution + Nelder–Mead, minimising the PID's summed rise time over every
   case of its figure subject to the limits the model-based controller meets on the same cases
@@ -66,9 +67,12 @@ def step_metrics(
     """Step-response figures of ``y(t)`` for a step from ``y0`` to ``ref`` at t = t[0].
 
     rise_time_s: first time y passes 90 % of the step minus the first time it passes 10 % (None if it
-    never reaches 90 %); overshoot: how far y goes past ``ref``, as a fraction of the step (≥ 0);
-    settling_time_s: time after which y stays within ±``band`` of the step around ``ref`` (None if the
-    last sample is outside); steady_state_error: |ref − mean of y over the last ``tail_s``| (units of y).
+    never reaches 90 %), each crossing interpolated linearly between the two samples around it (the
+    runs are sampled at the 50 Hz control rate; a first-sample crossing would quantise the rise time to
+    0.02 s and make two controllers within one period "tie"); overshoot: how far y goes past ``ref``, as
+    a fraction of the step (≥ 0); settling_time_s: time after which y stays within ±``band`` of the step
+    around ``ref`` (None if the last sample is outside); steady_state_error: |ref − mean of y over the
+    last ``tail_s``| (units of y).
     """
     t = np.asarray(t, float)
     y = np.asarray(y, float)
@@ -76,9 +80,8 @@ def step_metrics(
     if step == 0:
         raise InvalidInput("ref", "the step must change the reference")
     frac = (y - y0) / step
-    above10 = np.flatnonzero(frac >= 0.1)
-    above90 = np.flatnonzero(frac >= 0.9)
-    rise = float(t[above90[0]] - t[above10[0]]) if len(above90) else None
+    t10, t90 = crossing_time(t, frac, 0.1), crossing_time(t, frac, 0.9)
+    rise = None if t10 is None or t90 is None else t90 - t10
     overshoot = max(0.0, float(frac.max()) - 1.0)
     outside = np.flatnonzero(np.abs(frac - 1.0) > band)
     if len(outside) == 0:
@@ -95,6 +98,19 @@ def step_metrics(
         "settling_time_s": settling,
         "steady_state_error": sse,
     }
+
+
+def crossing_time(t: np.ndarray, frac: np.ndarray, level: float) -> float | None:
+    """First time ``frac`` reaches ``level``, interpolated linearly between the samples around it
+    (None if it never does; t[0] if it starts there)."""
+    above = np.flatnonzero(frac >= level)
+    if len(above) == 0:
+        return None
+    i = int(above[0])
+    if i == 0:
+        return float(t[0])
+    f0, f1 = float(frac[i - 1]), float(frac[i])
+    return float(t[i - 1] + (level - f0) / (f1 - f0) * (t[i] - t[i - 1]))
 
 
 def _tail_variation(tau: np.ndarray, tail_s: float = 1.0) -> float:
@@ -628,6 +644,7 @@ __all__ = [
     "RSLQRTuneResult",
     "TuneResult",
     "bench_controllers",
+    "crossing_time",
     "format_bench",
     "format_summary",
     "max_steady_roll",
