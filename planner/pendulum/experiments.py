@@ -453,7 +453,11 @@ class RSLQRTuneResult:
 
 
 def tune_rslqr(
-    robot: RobotProfile | str | None, generations: int = 10, population: int = 8, seed: int = 0
+    robot: RobotProfile | str | None,
+    generations: int = 10,
+    population: int = 8,
+    seed: int = 0,
+    base: RSLQRSettings | None = None,
 ) -> RSLQRTuneResult:
     """Tune the RSLQR's eq. 26 weights the same way as the roll PID (same cases, objective, limits).
 
@@ -468,7 +472,7 @@ def tune_rslqr(
 
     rob = robot if isinstance(robot, RobotProfile) else load_robot(robot)
     params = params_from_profile(rob)
-    base = RSLQRSettings()
+    base = base or RSLQRSettings()
     lo, hi = np.log([1.0, 0.01, 0.01, 10.0, 1.0]), np.log([1e4, 1e3, 1e3, 1e6, 1e5])
     cache: dict[tuple[float, ...], float] = {}
     evaluations = 0
@@ -487,7 +491,7 @@ def tune_rslqr(
         nonlocal evaluations
         st = settings_of(z)
         if st.q not in cache:
-            radius = sampled_spectral_radius(params, st)
+            radius = max(sampled_spectral_radius(params, st, sp) for sp in {0.0, *(c[0] for c in FIG13_CASES)})
             if radius >= 1.0:  # unstable as sampled at 50 Hz: it could only work by chattering in saturation
                 cache[st.q] = 100.0 + radius
             else:
