@@ -22,6 +22,7 @@ from planner.pendulum.experiments import (
     FIG11_CASES,
     FIG13_CASES,
     MAX_OVERSHOOT,
+    crossing_time,
     max_steady_roll,
     run_figures,
     step_metrics,
@@ -54,6 +55,19 @@ def test_step_metrics_of_known_responses() -> None:
     assert never["steady_state_error"] == pytest.approx(1.0, abs=1e-3)
     down = step_metrics(t, 2.0 - first, 2.0, 0.0)  # a step down is measured the same way
     assert down["rise_time_s"] == pytest.approx(m["rise_time_s"])
+
+
+def test_rise_time_is_not_quantised_by_the_sampling() -> None:
+    """Sampled at the 50 Hz control rate, the rise is still the continuous one: the crossings are
+    interpolated (the first sample past 10 % / 90 % would be up to one period off each)."""
+    exact = 0.5 * math.log(9.0)
+    for shift in (0.0, 0.007, 0.013):  # where the samples fall relative to the crossings
+        t = np.arange(0.0, 4.0, 0.02)
+        y = np.where(t >= shift, 1.0 - np.exp(-(t - shift) / 0.5), 0.0)
+        assert step_metrics(t, y, 0.0, 1.0)["rise_time_s"] == pytest.approx(exact, abs=1e-3)
+    t = np.arange(0.0, 4.0, 0.02)
+    assert crossing_time(t, np.clip(t / 2.0, 0.0, 1.0), 0.45) == pytest.approx(0.9)
+    assert crossing_time(t, t, 10.0) is None
 
 
 def _dip_below_steady_pitch(res: dict[str, Any]) -> float:
