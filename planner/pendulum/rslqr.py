@@ -51,13 +51,13 @@ class RSLQRSettings:
     the roll's stiffness (m + I_s/r²) v² at speed."""
 
     ts_s: float = 0.02
-    q: tuple[float, float, float, float, float] = (1.026, 0.04658, 1.926, 15730.0, 109.2)
+    q: tuple[float, float, float, float, float] = (15.15, 0.4389, 0.03086, 14130.0, 11.36)
     r: float = 0.02
     state_compensation: bool = True
     velocity_feedforward: bool = True
     steady_state_reference: bool = True
     integral_band_rad: float | None = 0.02
-    scheduled: bool = False
+    scheduled: bool = True
 
     def __post_init__(self) -> None:
         if not (math.isfinite(self.ts_s) and self.ts_s > 0):
