@@ -52,7 +52,7 @@ class RSLQRSettings:
 
     ts_s: float = 0.02
     q: tuple[float, float, float, float, float] = (15.15, 0.4389, 0.03086, 14130.0, 11.36)
-    r: float = 0.02
+    r: float = 0.04
     state_compensation: bool = True
     velocity_feedforward: bool = True
     steady_state_reference: bool = True
