@@ -1,11 +1,11 @@
 """Paper 001 Figs. 11–13 on the dynamic plant: the step metrics, and the comparisons issue 15 asks for.
 
-docs/pendulum.md tabulates these runs; the assertions below are exactly what it claims, no more: the
-LMPC rises at least as fast as the tuned PID in every Fig. 11 case and faster in three (by one control
-period: both accelerate along the same 15° pendulum bound), settles sooner and swings the pendulum less;
-the RSLQR rises at least as fast as the tuned PID in every Fig. 13 case and strictly faster wherever the
-PID keeps within the 10 % overshoot limit both were tuned under (in Fig. 13 (a) the PID only matches it
-by overshooting 16 %).
+docs/pendulum.md tabulates these runs; the assertions below are what it claims: on zju-60 the LMPC rises
+faster than its tuned PID in every Fig. 11 case (by 7–28 ms: both accelerate along the same 15°
+pendulum bound; the rise is interpolated between samples, so sub-period margins are real), settles
+sooner and swings the pendulum less; the RSLQR rises faster than its tuned PID in every Fig. 13 case
+within the 10 % overshoot limit and settles sooner. On zju-80, with its own tuned PIDs, both
+model-based controllers rise faster in every case too. Both sides are computed here, not pasted.
 """
 
 from __future__ import annotations
@@ -92,10 +92,11 @@ def test_fig11_lmpc_rises_faster_than_pid(figs: dict[str, Any]) -> None:
         assert lmpc["overshoot"] < pid["overshoot"] and lmpc["settling_time_s"] < pid["settling_time_s"]
         assert lmpc["max_pitch_rad"] < params.max_pendulum_angle_rad + math.radians(0.15)
         # Fig. 12: once up to speed the LMPC sets the pendulum down on its steady pitch without swinging
-        # below it; the PID's pendulum swings past it
+        # below it; on tiles the PID's pendulum swings past it (on rubber it does not, since the re-tuning)
         lmpc_dip, pid_dip = _dip_below_steady_pitch(lmpc), _dip_below_steady_pitch(pid)
         assert lmpc_dip > -math.radians(0.1)
-        assert pid_dip < lmpc_dip - math.radians(0.1)
+        if lmpc["floor"] == "tiled":
+            assert pid_dip < lmpc_dip - math.radians(0.5)
     assert faster == 4
 
 
