@@ -579,7 +579,7 @@ def format_summary(figs: dict[str, Any]) -> str:
             case = f"{row['speed_m_s']} m/s, {row['roll_rad']} rad"
             pend = row["max_pendulum_roll_rad"]
         lines.append(
-            f"{row['figure']:5} {case:22} {row['controller']:10} {num(row['rise_time_s'], '7.2f')} "
+            f"{row['figure']:5} {case:22} {row['controller']:10} {num(row['rise_time_s'], '7.3f')} "
             f"{100 * row['overshoot']:8.1f}% {num(row['settling_time_s'], '8.2f')} "
             f"{row['steady_state_error']:8.4f} {math.degrees(pend):11.1f}"
         )
