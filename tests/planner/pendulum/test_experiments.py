@@ -1,7 +1,7 @@
 """Paper 001 Figs. 11–13 on the dynamic plant: the step metrics, and the comparisons issue 15 asks for.
 
 docs/pendulum.md tabulates these runs; the assertions below are what it claims: on zju-60 the LMPC rises
-faster than its tuned PID in every Fig. 11 case (by 7–28 ms: both accelerate along the same 15°
+faster than its tuned PID in every Fig. 11 case (by 8–27 ms: both accelerate along the same 15°
 pendulum bound; the rise is interpolated between samples, so sub-period margins are real), settles
 sooner and swings the pendulum less; the RSLQR rises faster than its tuned PID in every Fig. 13 case
 within the 10 % overshoot limit and settles sooner. On zju-80, with its own tuned PIDs, both
