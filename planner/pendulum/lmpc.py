@@ -54,9 +54,9 @@ class LMPCSettings:
 
     ts_s: float = 0.02
     horizon: int = 50
-    control_horizon: int = 10
-    q: tuple[float, float, float, float] = (1.0, 0.5, 0.0, 4000.0)
-    r: float = 0.02
+    control_horizon: int = 25
+    q: tuple[float, float, float, float] = (1.0, 0.0, 0.0, 4000.0)
+    r: float = 0.002
     qpsol: str = "qpoases"
     pitch_limit: bool = True
     slack_weights: tuple[float, float] = (1e6, 1e4)

@@ -30,8 +30,8 @@ def _col(result: dict[str, Any], key: str) -> np.ndarray:
     return np.array([row[key] for row in result["series"]], dtype=float)
 
 
-def _fmt(x: float | None, unit: str = " s") -> str:
-    return "—" if x is None else f"{x:.2f}{unit}"
+def _fmt(x: float | None, unit: str = " s", digits: int = 2) -> str:
+    return "—" if x is None else f"{x:.{digits}f}{unit}"
 
 
 def _speed_title(res: dict[str, Any]) -> str:
@@ -44,8 +44,8 @@ def _roll_title(res: dict[str, Any]) -> str:
 
 def _legend_text(res: dict[str, Any]) -> str:
     return (
-        f"{LABELS[res['controller']]}: rise {_fmt(res['rise_time_s'])}, overshoot {100 * res['overshoot']:.1f} %, "
-        f"settle {_fmt(res['settling_time_s'])}"
+        f"{LABELS[res['controller']]}: rise {_fmt(res['rise_time_s'], digits=3)}, "
+        f"overshoot {100 * res['overshoot']:.1f} %, settle {_fmt(res['settling_time_s'])}"
     )
 
 

@@ -44,16 +44,22 @@ from planner.pendulum.dynamics import PendulumParams, linear_model
 class RSLQRSettings:
     """Weights of eq. 26 on (∫e, β, β̇, φ − φ_d, φ̇) and on τ_r (per N m²); which compensations to use.
 
-    The default weights are :func:`planner.pendulum.experiments.tune_rslqr`'s result (the same search,
-    objective and limits as the roll PID's tuning); ``integral_band_rad`` None = no integrator gating."""
+    The default q is :func:`planner.pendulum.experiments.tune_rslqr`'s result for the scheduled design
+    (the same search, objective and limits as the roll PID's tuning); r was then doubled from 0.02 to
+    0.04 because the tuned loop swung the pendulum past the motor's holding angle in a closed-loop
+    U-turn (docs/pendulum.md); ``integral_band_rad`` None = no integrator gating.
+    ``scheduled`` designs the gains about rolling straight at the measured speed (rounded to
+    :data:`SCHEDULE_STEP_M_S`) instead of at rest: the same eq. 26–28 on the linearisation that includes
+    the roll's stiffness (m + I_s/r²) v² at speed."""
 
     ts_s: float = 0.02
-    q: tuple[float, float, float, float, float] = (1.026, 0.04658, 1.926, 15730.0, 109.2)
-    r: float = 0.02
+    q: tuple[float, float, float, float, float] = (15.15, 0.4389, 0.03086, 14130.0, 11.36)
+    r: float = 0.04
     state_compensation: bool = True
     velocity_feedforward: bool = True
     steady_state_reference: bool = True
     integral_band_rad: float | None = 0.02
+    scheduled: bool = True
 
     def __post_init__(self) -> None:
         if not (math.isfinite(self.ts_s) and self.ts_s > 0):
@@ -77,12 +83,17 @@ def rslqr_gains(
     return k[1:], float(k[0]), p
 
 
-def sampled_spectral_radius(params: PendulumParams, settings: RSLQRSettings) -> float:
+SCHEDULE_STEP_M_S = 0.05
+"""Speed grid of the scheduled design (m/s)."""
+
+
+def sampled_spectral_radius(params: PendulumParams, settings: RSLQRSettings, speed: float = 0.0) -> float:
     """Spectral radius of the linear closed loop as it runs: ZOH plant at ``ts_s``, forward-Euler integral,
     the continuous-time gains. Below 1 = the sampled design is stable (the LQR is designed in continuous
-    time, so very high gains can be stable on paper and unstable at 50 Hz)."""
-    k_x, k_i, _ = rslqr_gains(params, settings)
-    lin = linear_model(params, "roll")
+    time, so very high gains can be stable on paper and unstable at 50 Hz). With ``speed`` ≠ 0: the
+    linear loop about rolling straight at that speed, with the gains the controller uses there."""
+    k_x, k_i, _ = rslqr_gains(params, settings, speed if settings.scheduled else 0.0)
+    lin = linear_model(params, "roll", speed=speed)
     ad, bd, _ = lin.discretise(settings.ts_s)
     cl = np.zeros((5, 5))
     cl[0, 0], cl[0, 3] = 1.0, settings.ts_s
@@ -98,6 +109,7 @@ class RSLQRRollController:
         self.params = params
         self.s = settings or RSLQRSettings()
         self.k_x, self.k_i, _ = rslqr_gains(params, self.s)
+        self._schedule: dict[int, tuple[np.ndarray, float]] = {0: (self.k_x, self.k_i)}
         m_inv = linear_model(params, "roll").m_inv
         self.m_r2, self.m_r4 = float(m_inv[0, 1]), float(m_inv[1, 1])
         self.tau_max = params.max_torque_roll_n_m
@@ -128,18 +140,29 @@ class RSLQRRollController:
         ratio = max(-1.0, min(1.0, tau / math.hypot(grav, yaw)))
         return math.asin(ratio) - math.atan2(yaw, grav)
 
+    def gains_at(self, v: float) -> tuple[np.ndarray, float]:
+        """(K_x, K_i) used at wheel speed ``v``: the design at rest, or (``scheduled``) about rolling at v."""
+        if not self.s.scheduled:
+            return self.k_x, self.k_i
+        key = int(round(abs(v) / SCHEDULE_STEP_M_S))
+        if key not in self._schedule:
+            k_x, k_i, _ = rslqr_gains(self.params, self.s, key * SCHEDULE_STEP_M_S)
+            self._schedule[key] = (k_x, k_i)
+        return self._schedule[key]
+
     def step(self, x: np.ndarray, phi_d: float, v: float = 0.0) -> float:
         """Measured x_r = (β, β̇, φ, φ̇), desired roll φ_d (rad), wheel speed v (m/s) → τ_r."""
         beta, beta_dot, phi, phi_dot = (float(c) for c in x)
+        k_x, k_i = self.gains_at(v)
         rho = self.velocity_feedforward(v, phi_d) if self.s.velocity_feedforward else 0.0
         beta_d = self.steady_beta(v, phi_d, rho) if self.s.steady_state_reference else 0.0
         dev = np.array([beta - beta_d, beta_dot, phi - phi_d, phi_dot])
-        u_s = -float(self.k_x @ dev) - self.k_i * self.integral
+        u_s = -float(k_x @ dev) - k_i * self.integral
         delta = self.state_compensation(beta, beta_dot) if self.s.state_compensation else 0.0
         u = u_s + delta + rho
         err = phi - phi_d
         # conditional integration: hold the integral while saturated and integrating would push further
-        pushes = -self.k_i * err * u > 0
+        pushes = -k_i * err * u > 0
         band = self.s.integral_band_rad
         if not (abs(u) >= self.tau_max and pushes) and (band is None or abs(err) <= band):
             self.integral += err * self.s.ts_s
@@ -147,4 +170,4 @@ class RSLQRRollController:
         return max(-self.tau_max, min(self.tau_max, u))
 
 
-__all__ = ["RSLQRRollController", "RSLQRSettings", "rslqr_gains", "sampled_spectral_radius"]
+__all__ = ["SCHEDULE_STEP_M_S", "RSLQRRollController", "RSLQRSettings", "rslqr_gains", "sampled_spectral_radius"]

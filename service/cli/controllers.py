@@ -89,9 +89,12 @@ def _tune(args: argparse.Namespace) -> int:
     if args.controller == "rslqr":
         if args.loop != "roll":
             raise InvalidInput("loop", "the RSLQR is the roll controller: use --loop roll")
-        st = tune_rslqr(args.robot)
+        from planner.pendulum.rslqr import RSLQRSettings
+
+        st = tune_rslqr(args.robot, base=RSLQRSettings(scheduled=args.scheduled))
         sys.stdout.write(
-            f"# RSLQRSettings.q (on ∫e, β, β̇, φ − φ_d, φ̇; r = {st.settings.r}): objective {st.objective:.3f} s "
+            f"# RSLQRSettings.q (on ∫e, β, β̇, φ − φ_d, φ̇; r = {st.settings.r}, "
+            f"scheduled = {st.settings.scheduled}): objective {st.objective:.3f} s "
             f"after {st.evaluations} evaluations\nq = {st.settings.q}\n"
         )
         emit_json(st.cases, None)
@@ -192,6 +195,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     tune = sub.add_parser("tune", help="tune a PID baseline (or the RSLQR) as docs/pendulum.md describes (minutes)")
     tune.add_argument("--loop", choices=("speed", "roll"), required=True)
     tune.add_argument("--controller", choices=("pid", "rslqr"), default="pid", help="what to tune (pid)")
+    tune.add_argument(
+        "--scheduled", action="store_true", help="RSLQR: design the gains about rolling at the measured speed"
+    )
     common(tune)
     tune.set_defaults(func=_tune)
 

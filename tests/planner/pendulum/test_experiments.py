@@ -1,11 +1,11 @@
 """Paper 001 Figs. 11–13 on the dynamic plant: the step metrics, and the comparisons issue 15 asks for.
 
-docs/pendulum.md tabulates these runs; the assertions below are exactly what it claims, no more: the
-LMPC rises at least as fast as the tuned PID in every Fig. 11 case and faster in three (by one control
-period: both accelerate along the same 15° pendulum bound), settles sooner and swings the pendulum less;
-the RSLQR rises at least as fast as the tuned PID in every Fig. 13 case and strictly faster wherever the
-PID keeps within the 10 % overshoot limit both were tuned under (in Fig. 13 (a) the PID only matches it
-by overshooting 16 %).
+docs/pendulum.md tabulates these runs; the assertions below are what it claims: on zju-60 the LMPC rises
+faster than its tuned PID in every Fig. 11 case (by 8–27 ms: both accelerate along the same 15°
+pendulum bound; the rise is interpolated between samples, so sub-period margins are real), settles
+sooner and swings the pendulum less; the RSLQR rises faster than its tuned PID in every Fig. 13 case
+within the 10 % overshoot limit and settles sooner. On zju-80, with its own tuned PIDs, both
+model-based controllers rise faster in every case too. Both sides are computed here, not pasted.
 """
 
 from __future__ import annotations
@@ -22,8 +22,11 @@ from planner.pendulum.experiments import (
     FIG11_CASES,
     FIG13_CASES,
     MAX_OVERSHOOT,
+    crossing_time,
     max_steady_roll,
+    roll_step,
     run_figures,
+    speed_step,
     step_metrics,
 )
 from planner.robot import load_robot
@@ -56,6 +59,19 @@ def test_step_metrics_of_known_responses() -> None:
     assert down["rise_time_s"] == pytest.approx(m["rise_time_s"])
 
 
+def test_rise_time_is_not_quantised_by_the_sampling() -> None:
+    """Sampled at the 50 Hz control rate, the rise is still the continuous one: the crossings are
+    interpolated (the first sample past 10 % / 90 % would be up to one period off each)."""
+    exact = 0.5 * math.log(9.0)
+    for shift in (0.0, 0.007, 0.013):  # where the samples fall relative to the crossings
+        t = np.arange(0.0, 4.0, 0.02)
+        y = np.where(t >= shift, 1.0 - np.exp(-(t - shift) / 0.5), 0.0)
+        assert step_metrics(t, y, 0.0, 1.0)["rise_time_s"] == pytest.approx(exact, abs=1e-3)
+    t = np.arange(0.0, 4.0, 0.02)
+    assert crossing_time(t, np.clip(t / 2.0, 0.0, 1.0), 0.45) == pytest.approx(0.9)
+    assert crossing_time(t, t, 10.0) is None
+
+
 def _dip_below_steady_pitch(res: dict[str, Any]) -> float:
     """How far (rad, ≤ 0) the pitch swings below its final value once the speed has reached 90 %."""
     v = np.array([r["v"] for r in res["series"]])
@@ -64,36 +80,45 @@ def _dip_below_steady_pitch(res: dict[str, Any]) -> float:
     return float((pitch[after:] - pitch[-1]).min())
 
 
-def test_fig11_lmpc_rises_at_least_as_fast_as_pid(figs: dict[str, Any]) -> None:
+def test_fig11_lmpc_rises_faster_than_pid(figs: dict[str, Any]) -> None:
     params = params_from_profile(ROBOT)
     assert len(figs["fig11"]) == len(FIG11_CASES) == 4
     faster = 0
     for case in figs["fig11"]:
         lmpc, pid = case["lmpc"], case["pid"]
-        assert lmpc["rise_time_s"] <= pid["rise_time_s"] + 1e-9, (lmpc["speed_m_s"], lmpc["floor"])
-        faster += lmpc["rise_time_s"] < pid["rise_time_s"] - 1e-9
+        assert lmpc["rise_time_s"] < pid["rise_time_s"], (lmpc["speed_m_s"], lmpc["floor"])
+        faster += 1
         assert lmpc["overshoot"] < 0.01 and lmpc["steady_state_error"] < 1e-3 * lmpc["speed_m_s"]
         assert lmpc["overshoot"] < pid["overshoot"] and lmpc["settling_time_s"] < pid["settling_time_s"]
         assert lmpc["max_pitch_rad"] < params.max_pendulum_angle_rad + math.radians(0.15)
         # Fig. 12: once up to speed the LMPC sets the pendulum down on its steady pitch without swinging
-        # below it; the PID's pendulum swings past it
+        # below it; on tiles the PID's pendulum swings past it (on rubber it does not, since the re-tuning)
         lmpc_dip, pid_dip = _dip_below_steady_pitch(lmpc), _dip_below_steady_pitch(pid)
         assert lmpc_dip > -math.radians(0.1)
-        assert pid_dip < lmpc_dip - math.radians(0.1)
-    assert faster >= 3
+        if lmpc["floor"] == "tiled":
+            assert pid_dip < lmpc_dip - math.radians(0.5)
+    assert faster == 4
 
 
-def test_fig13_rslqr_rises_at_least_as_fast_as_pid(figs: dict[str, Any]) -> None:
+def test_fig13_rslqr_rises_faster_than_pid(figs: dict[str, Any]) -> None:
     assert len(figs["fig13"]) == len(FIG13_CASES) == 3
-    strict = 0
     for case in figs["fig13"]:
         lqr, pid = case["rslqr"], case["pid"]
-        assert lqr["rise_time_s"] <= pid["rise_time_s"] + 1e-9
+        assert lqr["rise_time_s"] < pid["rise_time_s"], (lqr["speed_m_s"], lqr["roll_rad"])
         assert lqr["overshoot"] <= MAX_OVERSHOOT and lqr["settling_time_s"] < pid["settling_time_s"]
-        if pid["overshoot"] <= MAX_OVERSHOOT:
-            assert lqr["rise_time_s"] < pid["rise_time_s"]
-            strict += 1
-    assert strict >= 2
+
+
+@pytest.mark.parametrize("robot", ["zju-80"])
+def test_model_based_controllers_rise_faster_than_their_pids(robot: str) -> None:
+    """Every case of Figs. 11 and 13 on another robot with its own tuned PIDs (zju-60: the tests above),
+    both controllers run here on runs just long enough to rise."""
+    rob = load_robot(robot)
+    for speed, floor in FIG11_CASES:
+        runs = {c: speed_step(rob, c, speed, floor, duration_s=1.0 + 2.7 * speed) for c in ("lmpc", "pid")}
+        assert runs["lmpc"]["rise_time_s"] < runs["pid"]["rise_time_s"], (speed, floor)
+    for speed, roll in FIG13_CASES:
+        runs = {c: roll_step(rob, c, speed, roll, duration_s=2.5) for c in ("rslqr", "pid")}
+        assert runs["rslqr"]["rise_time_s"] < runs["pid"]["rise_time_s"], (speed, roll)
 
 
 def test_larger_roll_is_harder_at_higher_speed(figs: dict[str, Any]) -> None:
