@@ -4,8 +4,10 @@ docs/pendulum.md tabulates these runs; the assertions below are what it claims: 
 faster than its tuned PID in every Fig. 11 case (by 8–27 ms: both accelerate along the same 15°
 pendulum bound; the rise is interpolated between samples, so sub-period margins are real), settles
 sooner and swings the pendulum less; the RSLQR rises faster than its tuned PID in every Fig. 13 case
-within the 10 % overshoot limit and settles sooner. On zju-80, with its own tuned PIDs, both
-model-based controllers rise faster in every case too. Both sides are computed here, not pasted.
+within the 10 % overshoot limit and settles sooner. On zju-80, with its own tuned PIDs, the LMPC rises
+faster in every case; the RSLQR (zju-60's weights, not tuned for zju-80) settles sooner within the
+overshoot limit in every case, and its tuned PID rises faster only by overshooting the limit or by less
+than 5 ms. Both sides are computed here, not pasted.
 """
 
 from __future__ import annotations
@@ -109,16 +111,19 @@ def test_fig13_rslqr_rises_faster_than_pid(figs: dict[str, Any]) -> None:
 
 
 @pytest.mark.parametrize("robot", ["zju-80"])
-def test_model_based_controllers_rise_faster_than_their_pids(robot: str) -> None:
-    """Every case of Figs. 11 and 13 on another robot with its own tuned PIDs (zju-60: the tests above),
-    both controllers run here on runs just long enough to rise."""
+def test_model_based_controllers_against_their_pids_on_another_robot(robot: str) -> None:
+    """Every case of Figs. 11 and 13 on another robot with its own tuned PIDs (zju-60: the tests above).
+    The LMPC rises faster in every case. The RSLQR keeps zju-60's weights: it stays within the overshoot
+    limit and settles sooner in every case, but its PID (tuned on zju-80) rises faster where it overshoots
+    the limit, and ties it within 5 ms elsewhere (docs/pendulum.md)."""
     rob = load_robot(robot)
     for speed, floor in FIG11_CASES:
         runs = {c: speed_step(rob, c, speed, floor, duration_s=1.0 + 2.7 * speed) for c in ("lmpc", "pid")}
         assert runs["lmpc"]["rise_time_s"] < runs["pid"]["rise_time_s"], (speed, floor)
     for speed, roll in FIG13_CASES:
-        runs = {c: roll_step(rob, c, speed, roll, duration_s=2.5) for c in ("rslqr", "pid")}
-        assert runs["rslqr"]["rise_time_s"] < runs["pid"]["rise_time_s"], (speed, roll)
+        lqr, pid = (roll_step(rob, c, speed, roll, duration_s=4.0) for c in ("rslqr", "pid"))
+        assert lqr["overshoot"] <= MAX_OVERSHOOT and lqr["settling_time_s"] < pid["settling_time_s"], (speed, roll)
+        assert (lqr["rise_time_s"] < pid["rise_time_s"] + 0.005 or pid["overshoot"] > MAX_OVERSHOOT), (speed, roll)
 
 
 def test_larger_roll_is_harder_at_higher_speed(figs: dict[str, Any]) -> None:
