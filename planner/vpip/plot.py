@@ -9,6 +9,20 @@ from typing import Any
 import numpy as np
 
 
+def _rod_heatmap(fig: Any, ax_rod: Any, t: np.ndarray, rods: np.ndarray, l_max: float) -> None:
+    """The 16 rod lengths over time: one row per rod, numbered, the two rings named on the right."""
+    n = rods.shape[0]
+    img = ax_rod.imshow(rods, aspect="auto", origin="lower", interpolation="nearest", cmap="viridis",
+                        extent=(float(t[0]), float(t[-1]), -0.5, n - 0.5), vmin=0.0, vmax=l_max)
+    ax_rod.axhline(n / 2 - 0.5, color="white", lw=0.8)
+    ax_rod.set_yticks(range(n), [str(k) for k in range(n)], fontsize=7)
+    ax_rod.set_ylabel("rod number")
+    ring = ax_rod.secondary_yaxis("right")
+    ring.set_yticks([n / 4 - 0.5, 3 * n / 4 - 0.5], [f"left ring\n(0–{n // 2 - 1})", f"right ring\n({n // 2}–{n - 1})"])
+    ring.tick_params(length=0, labelsize=8)
+    fig.colorbar(img, ax=ax_rod, label="rod length (m)", pad=0.04)
+
+
 def schedule_figure(result: Mapping[str, Any], plan: Mapping[str, Any] | None = None) -> Any:
     """The figure :func:`plot_schedule` writes (style: :mod:`planner.plotstyle`)."""
     from planner import plotstyle as ps
@@ -25,30 +39,12 @@ def schedule_figure(result: Mapping[str, Any], plan: Mapping[str, Any] | None = 
     ax_roll = fig.add_subplot(grid[1, 0], sharex=ax_rod)
     ax_pitch = fig.add_subplot(grid[2, 0], sharex=ax_rod)
     ax_xy = fig.add_subplot(grid[:, 1])
-    n = rods.shape[0]
-    img = ax_rod.imshow(
-        rods,
-        aspect="auto",
-        origin="lower",
-        interpolation="nearest",
-        cmap="viridis",
-        extent=(float(t[0]), float(t[-1]), -0.5, n - 0.5),
-        vmin=0.0,
-        vmax=float(result["params"]["l_max"]),
-    )
-    ax_rod.axhline(n / 2 - 0.5, color="white", lw=0.8)
-    # every rod by its number; the rings named on the right
-    ax_rod.set_yticks(range(n), [str(k) for k in range(n)], fontsize=7)
-    ax_rod.set_ylabel("rod number")
-    ring = ax_rod.secondary_yaxis("right")
-    ring.set_yticks([n / 4 - 0.5, 3 * n / 4 - 0.5], [f"left ring\n(0–{n // 2 - 1})", f"right ring\n({n // 2}–{n - 1})"])
-    ring.tick_params(length=0, labelsize=8)
+    _rod_heatmap(fig, ax_rod, t, rods, float(result["params"]["l_max"]))
     ax_rod.set_title(
         f"commanded rod lengths ({result['driver']} driver, rate-limited to "
         f"{result['params']['rod_speed_m_s']} m/s)", fontsize=10
     )
     ax_rod.tick_params(labelbottom=False)
-    fig.colorbar(img, ax=ax_rod, label="rod length (m)", pad=0.01)
     ax_roll.plot(t, deg(s["roll_desired_rad"]), "k--", lw=1.2, label="desired roll")
     ax_roll.plot(t, deg(s["roll_rad"]), "C0", lw=1.5, label=f"roll ({kind} plant)")
     ax_roll.plot(t, deg(s["phi_vpip_rad"]), "C3", lw=1.0, label="φ_VPIP")
@@ -159,21 +155,8 @@ def plot_circle(result: Mapping[str, Any], out: str | Path) -> None:
     ax_w.plot(t, theta, "C2", lw=0.8, label="θ_VPIP (rad)")
     ax_w.legend(fontsize=8, loc="upper right", ncol=3)
     ax_w.grid(alpha=0.3)
-    n = rods.shape[0]
-    img = ax_rod.imshow(
-        rods,
-        aspect="auto",
-        origin="lower",
-        interpolation="nearest",
-        cmap="viridis",
-        extent=(float(t[0]), float(t[-1]), -0.5, n - 0.5),
-        vmin=0.0,
-        vmax=float(result["params"]["l_max"]),
-    )
-    ax_rod.axhline(n / 2 - 0.5, color="white", lw=0.8)
-    ax_rod.set_yticks([n / 4 - 0.5, 3 * n / 4 - 0.5], ["left ring", "right ring"])
+    _rod_heatmap(fig, ax_rod, t, rods, float(result["params"]["l_max"]))
     ax_rod.set_xlabel("time (s)")
-    fig.colorbar(img, ax=ax_rod, label="rod length (m)", pad=0.01)
     kind = result["plant"]["kind"]
     d = "—" if summ["diameter_m"] is None else f"{summ['diameter_m']:.2f} m"
     fig.suptitle(
