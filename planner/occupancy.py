@@ -10,14 +10,22 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Protocol
 
 import numpy as np
 
 from planner.errors import MapError
 
 if TYPE_CHECKING:
-    from planner.maps.mesh_world import MeshWorld
+    from planner.robot import RobotProfile
+
+
+class ExactWorld(Protocol):
+    """The exact geometry a grid was sliced from (:class:`planner.maps.mesh_world.MeshWorld`): it re-checks a
+    path against the real surfaces. Declared here so the grid can carry one without importing the mesh code."""
+
+    def path_collides(self, xs: np.ndarray, ys: np.ndarray, yaws: np.ndarray, robot: RobotProfile,
+                      clearance_m: float = ..., distance_every: int = ...) -> tuple[bool, int | None, float]: ...
 
 OCCUPIED = 100
 FREE = 0
@@ -49,7 +57,7 @@ class OccupancyGrid:
     name: str = "map"
     source: dict[str, Any] = field(default_factory=dict)
     mesh_path: Path | None = None
-    mesh_world: MeshWorld | None = field(default=None, repr=False)
+    mesh_world: ExactWorld | None = field(default=None, repr=False)
 
     def __post_init__(self) -> None:
         if not (math.isfinite(self.resolution_m) and self.resolution_m > 0):

@@ -37,7 +37,7 @@ from service.core import PlanningService
 from service.outcome import Outcome
 from service.ros import OCCUPANCY_GRID, PATH, POSE_STAMPED, msgdef, path_msg, typestore
 from service.wire import MAP_FRAMES, InlineGrid, PlanRequest, PoseIn
-from service.zenoh_node import undeclare_all
+from service.zenoh_entities import undeclare_all
 
 log = logging.getLogger(__name__)
 

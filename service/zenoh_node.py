@@ -53,6 +53,7 @@ from service.wire import (
     SimulateRequest,
     invalid_input,
 )
+from service.zenoh_entities import undeclare_all
 
 log = logging.getLogger(__name__)
 
@@ -100,17 +101,6 @@ def parse(model: type[M], payload: zenoh.ZBytes | None, limit: int) -> M:
         raise invalid_input(exc.errors()) from None
     except RecursionError:
         raise InvalidInput("body", "nested too deeply") from None
-
-
-def undeclare_all(entities: list[Any]) -> None:
-    """Undeclare ``entities`` (subscribers, queryables, tokens ...) newest first and empty the list; an
-    entity the closing session already dropped is skipped."""
-    for entity in reversed(entities):
-        try:
-            entity.undeclare()
-        except zenoh.ZError as exc:
-            log.debug("undeclare: %s", exc)
-    entities.clear()
 
 
 def refusal(exc: Exception, where: str) -> Outcome:

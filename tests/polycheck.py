@@ -1,4 +1,4 @@
-"""A brute-force footprint-polygon checker for tests, sharing no code with planner/hybrid_astar/bench_polygon.py.
+"""A brute-force footprint-polygon checker for tests, sharing no code with lab/planning/referee.py.
 
 It clips the placed polygon against every blocked cell square near it (Sutherland–Hodgman) and calls a pose
 colliding when some clipped area is positive or a vertex leaves the map; clearances are vertex-to-edge

@@ -24,7 +24,7 @@ the usual double-loop PID of pendulum-driven spheres, for both loops:
 
 Both PIDs measure what the model-based controllers measure (speed, roll, the pendulum angle and rate),
 obey the same torque limits and run at the same 50 Hz. Gains come from the profile's ``[dynamics.pid]``
-table; they were found by :func:`planner.pendulum.experiments.tune_pid` (``sphereplan controllers
+table; they were found by :func:`lab.pendulum.tuning.tune_pid` (``sphereplan controllers
 tune``), which minimises the PID's own summed rise time over every case of its figure
 (docs/pendulum.md, "The PID baselines and how they were tuned fairly").
 """

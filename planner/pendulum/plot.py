@@ -2,7 +2,7 @@
 
 :func:`plot_step` draws one ``speed_step`` / ``roll_step`` result (the CLI's ``--plot``);
 :func:`plot_fig11`, :func:`plot_fig12` and :func:`plot_fig13` draw every case of a
-:func:`~planner.pendulum.experiments.run_figures` result with both controllers, as docs/pendulum.md shows.
+:func:`~lab.pendulum.figures.run_figures` result with both controllers, as docs/pendulum.md shows.
 """
 
 from __future__ import annotations

@@ -44,7 +44,7 @@ from planner.pendulum.dynamics import PendulumParams, linear_model
 class RSLQRSettings:
     """Weights of eq. 26 on (∫e, β, β̇, φ − φ_d, φ̇) and on τ_r (per N m²); which compensations to use.
 
-    The default q is :func:`planner.pendulum.experiments.tune_rslqr`'s result for the scheduled design
+    The default q is :func:`lab.pendulum.tuning.tune_rslqr`'s result for the scheduled design
     (the same search, objective and limits as the roll PID's tuning); r was then doubled from 0.02 to
     0.04 because the tuned loop swung the pendulum past the motor's holding angle in a closed-loop
     U-turn (docs/pendulum.md); ``integral_band_rad`` None = no integrator gating.

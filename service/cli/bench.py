@@ -2,7 +2,7 @@
 
 ``--suite real`` instead draws seeded random problems on Nav2's maps (``maps/real``) the way Nav2's planner
 benchmark does and compares sphereplan with OMPL BIT* on Dubins and Reeds–Shepp spaces
-(:mod:`planner.hybrid_astar.realbench`, docs/planning.md "The real-map benchmark").
+(:mod:`lab.planning.real`, docs/planning.md "The real-map benchmark").
 """
 
 from __future__ import annotations
@@ -17,9 +17,6 @@ from service.cli._io import finite_float, positive_float, quiet
 
 if TYPE_CHECKING:  # the benchmark's modules load numba, scipy and OMPL: only when the verb runs (fast --help)
     from planner.hybrid_astar.search import PlannerOptions
-
-#: planner.hybrid_astar.realbench.REAL_MAPS, repeated so that --help does not import the benchmark
-DEFAULT_REAL_MAPS = "warehouse,depot,smoothers_world,100by100_20"
 
 VERB = "bench"
 HELP = "benchmark the Hybrid A* against OMPL BIT* and RRT* on the shipped problem sets or on Nav2's maps"
@@ -39,8 +36,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "plan times; mpc: MPC step times of the tracker; all: those three; real: random "
                              "problems on Nav2's maps against BIT* (minutes)")
     real = parser.add_argument_group("--suite real")
-    real.add_argument("--real-maps", default=DEFAULT_REAL_MAPS,
-                      help="comma-separated map names in maps/real or YAML paths (default: %(default)s)")
+    real.add_argument("--real-maps", default=None,
+                      help="comma-separated map names in maps/real or YAML paths (default: every map in maps/real)")
     real.add_argument("--per-map", type=int, default=6, help="problems drawn per map (default 6)")
     real.add_argument("--seed", type=int, default=0, help="seed of the problem draw (default 0)")
     real.add_argument("--time-limit", type=positive_float, default=None,
@@ -68,14 +65,18 @@ def _options(text: str | None) -> PlannerOptions:
 
 def run_real(args: argparse.Namespace) -> int:
     """``--suite real``: table on stdout, progress on stderr, CSV and PNG written."""
-    from planner.hybrid_astar.realbench import format_real_table, plot_real, resolve_map, run_real_bench, write_real_csv
+    from lab.planning.real.bench import run_real_bench
+    from lab.planning.real.figure import plot_real
+    from lab.planning.real.problems import real_map_names, resolve_map
+    from lab.planning.real.summary import format_real_table, write_real_csv
     from planner.robot import load_robot
 
     if args.per_map < 1:
         raise InvalidInput("--per-map", "must be ≥ 1")
     robot = load_robot(args.robot)
     options = _options(args.options)
-    specs = [m.strip() for m in args.real_maps.split(",") if m.strip()]
+    given = args.real_maps if args.real_maps is not None else ",".join(real_map_names())
+    specs = [m.strip() for m in given.split(",") if m.strip()]
     if not specs:
         raise InvalidInput("--real-maps", "names no map")
     paths = [resolve_map(m) for m in specs]
@@ -110,18 +111,18 @@ def run(args: argparse.Namespace) -> int:
     if args.runs < 1:
         raise InvalidInput("--runs", "must be ≥ 1")
     if args.suite in ("reconfigure", "all"):
-        from planner.spherobot.bench import benchmark, format_benchmark
+        from lab.spherobot_bench import benchmark, format_benchmark
 
         print("reconfiguration plan times (200 random problems per method and mode)")
         print(format_benchmark(benchmark(200, 0)) + "\n")
     if args.suite in ("mpc", "all"):
-        from planner.closed_loop.simulate import bench_mpc, format_mpc_bench
+        from lab.mpc_bench import bench_mpc, format_mpc_bench
 
         print("MPC tracker step times (zju-60, 50 Hz)")
         print(format_mpc_bench(bench_mpc()) + "\n")
     if args.suite not in ("planning", "all"):
         return 0
-    from planner.hybrid_astar.bench import cold_start_s, format_table, plot_bench, run_bench, write_csv
+    from lab.planning.shipped import cold_start_s, format_table, plot_bench, run_bench, write_csv
     from planner.maps.problems import list_problems
     from planner.robot import load_robot
 

@@ -36,7 +36,7 @@ def _emit(result: dict[str, Any], out: str | None) -> None:
 
 
 def _step(args: argparse.Namespace) -> int:
-    from planner.pendulum.experiments import speed_step
+    from planner.pendulum.steps import speed_step
 
     result = speed_step(args.robot, args.controller, args.speed, args.floor, args.duration)
     if args.plot:
@@ -48,7 +48,7 @@ def _step(args: argparse.Namespace) -> int:
 
 
 def _roll(args: argparse.Namespace) -> int:
-    from planner.pendulum.experiments import roll_step
+    from planner.pendulum.steps import roll_step
 
     roll = math.radians(args.roll) if args.degrees else args.roll
     result = roll_step(args.robot, args.controller, args.speed, roll, args.duration)
@@ -61,7 +61,7 @@ def _roll(args: argparse.Namespace) -> int:
 
 
 def _figures(args: argparse.Namespace) -> int:
-    from planner.pendulum.experiments import format_summary, run_figures, summary_rows
+    from lab.pendulum.figures import format_summary, run_figures, summary_rows
     from planner.pendulum.plot import plot_fig11, plot_fig12, plot_fig13
 
     folder = Path(args.out_dir) if args.out_dir else None
@@ -84,7 +84,7 @@ def _figures(args: argparse.Namespace) -> int:
 
 
 def _tune(args: argparse.Namespace) -> int:
-    from planner.pendulum.experiments import tune_pid, tune_rslqr
+    from lab.pendulum.tuning import tune_pid, tune_rslqr
 
     if args.controller == "rslqr":
         if args.loop != "roll":
@@ -113,7 +113,7 @@ def _tune(args: argparse.Namespace) -> int:
 
 
 def _bench(args: argparse.Namespace) -> int:
-    from planner.pendulum.experiments import bench_controllers, format_bench
+    from lab.pendulum.timing import bench_controllers, format_bench
 
     sys.stdout.write(format_bench(bench_controllers(args.robot, args.steps)) + "\n")
     return 0

@@ -3,13 +3,11 @@
 sphereplan simulate --map M.yaml --path PLAN.json [--robot P] [--seed N] [--noise none|default]
                     [--tracker mpc|pursuit] [--model kinematic|dynamic] --out SIM.json [--plot SIM.png]
 sphereplan simulate --track [--map M.yaml] ...     paper 001's 16.2 m × 8.4 m clockwise lap
-sphereplan simulate --bench                        MPC step-time table
 """
 
 from __future__ import annotations
 
 import argparse
-import sys
 from typing import Any
 
 from planner.errors import InvalidInput
@@ -34,7 +32,6 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         action="store_true",
         help="roll paper 001's 16.2 m x 8.4 m track clockwise (centred on the map)",
     )
-    src.add_argument("--bench", action="store_true", help="print the MPC step-time table and exit")
     parser.add_argument(
         "--map", metavar="M.yaml", help="ROS map_server YAML, or an MCAP file / rosbag2 folder with a "
         "nav_msgs/OccupancyGrid (optional with --track: open field)"
@@ -84,16 +81,7 @@ def _read_plan(path: str) -> dict[str, Any]:
     return plan
 
 
-def _bench() -> int:
-    from planner.closed_loop.simulate import bench_mpc, format_mpc_bench
-
-    sys.stdout.write(format_mpc_bench(bench_mpc()) + "\n")
-    return 0
-
-
 def run(args: argparse.Namespace) -> int:
-    if args.bench:
-        return _bench()
     import numpy as np
 
     from planner.closed_loop.simulate import SimulationOptions, simulate_plan

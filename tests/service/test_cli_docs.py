@@ -163,12 +163,10 @@ def test_help_loads_no_heavy_library() -> None:
 
 
 def test_choices_repeated_for_a_fast_help_match_the_planner() -> None:
-    from planner.hybrid_astar.realbench import REAL_MAPS
     from planner.spherobot import request
     from planner.vpip import cascade
-    from service.cli import bench, reconfigure, vpip
+    from service.cli import reconfigure, vpip
 
-    assert bench.DEFAULT_REAL_MAPS == ",".join(REAL_MAPS)
     assert reconfigure.METHODS == request.METHODS
     assert vpip.PLANTS == cascade.PLANTS
 

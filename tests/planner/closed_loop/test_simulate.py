@@ -6,7 +6,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from planner.closed_loop.simulate import SimulationOptions, bench_mpc, simulate_plan
+from planner.closed_loop.simulate import SimulationOptions, simulate_plan
 from planner.closed_loop.simulator import Disturbances
 from planner.occupancy import OccupancyGrid
 from planner.robot import load_robot
@@ -46,12 +46,6 @@ def test_gnss_denied_the_estimate_is_the_odometry() -> None:
     sim = simulate_plan(FIELD, plan, ROBOT, seed=2, noise=denied, options=PURSUIT)
     assert sim["gnss"] == []
     assert sim["estimate"] == sim["odometry"]
-
-
-def test_bench_rows() -> None:
-    rows = bench_mpc(horizons=(8,), steps=20)
-    assert len(rows) == 1 and rows[0]["horizon"] == 8 and rows[0]["steps"] >= 20
-    assert 0 < rows[0]["p50_ms"] <= rows[0]["p95_ms"]
 
 
 def test_reached_goal_is_decided_by_the_true_position_not_the_estimate() -> None:

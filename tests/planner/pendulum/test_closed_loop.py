@@ -1,6 +1,6 @@
 """Plan → tracker (eq. 15 / pursuit) → LMPC + RSLQR → dynamic plant, and the GNSS-denied patrol (Fig. 10).
 
-The full sweep over every shipped solvable problem is ``tools/pendulum_rollout.py`` (minutes; its last
+The full sweep over every shipped solvable problem is ``lab/pendulum/rollout.py`` (minutes; its last
 run is reported in docs/pendulum.md); these are the quick checks CI runs.
 """
 

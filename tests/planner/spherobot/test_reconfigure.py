@@ -9,7 +9,6 @@ import pytest
 
 from planner.errors import GoalOutsideMap, InvalidInput, NoValidPathFound, StartOccupied
 from planner.occupancy import OccupancyGrid
-from planner.spherobot.bench import benchmark, format_benchmark
 from planner.spherobot.reconfigure import candidates, plan_reconfiguration
 from planner.spherobot.request import ReconfigureRequest
 from tests.reconfigcheck import check_result, disc_hits
@@ -164,12 +163,3 @@ def test_candidates_are_sorted_shortest_first():
     req = ReconfigureRequest.from_dict({**EXAMPLE, "alpha_final": None, "goal_heading": 40.0})
     lengths = [m.length_m for m in candidates(req)]
     assert lengths == sorted(lengths) and len(lengths) > 2
-
-
-def test_benchmark_table():
-    rows = benchmark(n=3, seed=1)
-    assert {(r["method"], r["mode"]) for r in rows} == {
-        (m, k) for m in ("arc", "triangle") for k in ("partial", "complete")
-    }
-    text = format_benchmark(rows)
-    assert "plan med ms" in text and len(text.splitlines()) == 6

@@ -19,15 +19,15 @@ from typing import Any
 import numpy as np
 import pytest
 
+from lab.pendulum.figures import run_figures
 from planner.pendulum.dynamics import params_from_profile
-from planner.pendulum.experiments import (
+from planner.pendulum.steps import (
     FIG11_CASES,
     FIG13_CASES,
     MAX_OVERSHOOT,
     crossing_time,
     max_steady_roll,
     roll_step,
-    run_figures,
     speed_step,
     step_metrics,
 )

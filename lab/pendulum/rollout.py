@@ -2,8 +2,8 @@
 
 Run from the repository root (≈ 10–20 min on a shared 2-core machine, so it is a script, not a CI test)::
 
-    python tools/pendulum_rollout.py                       # zju-60, eq. 15 MPC → LMPC + RSLQR → plant
-    python tools/pendulum_rollout.py --only garage --csv out.csv
+    python -m lab.pendulum.rollout                       # zju-60, eq. 15 MPC → LMPC + RSLQR → plant
+    python -m lab.pendulum.rollout --only garage --csv out.csv
 
 For each solvable problem of ``maps/problems/*.json`` (:func:`planner.maps.problems.list_problems`) it
 plans with the Hybrid A* (``plan_path``, the problem's time limit) and rolls the plan with

@@ -2,8 +2,8 @@
 
 Run from the repository root (minutes per case on a shared 2-core machine, so it is a script)::
 
-    python tools/pendulum_min_rise.py                    # every Fig. 11 case, zju-60
-    python tools/pendulum_min_rise.py --robot zju-80 --case 0.5 tiled
+    python -m lab.pendulum.min_rise                    # every Fig. 11 case, zju-60
+    python -m lab.pendulum.min_rise --robot zju-80 --case 0.5 tiled
 
 For one case of Fig. 11 (speed V, floor) it solves, with CasADi + IPOPT, the minimum-time problem on
 the *nonlinear* pitch model of :mod:`planner.pendulum.dynamics` (the plant's own equations and its
@@ -12,7 +12,7 @@ integrator: RK4, 4 substeps per period) under the bounds both controllers obey:
 * the torque is held over each 20 ms period (50 Hz, as both controllers), |τ_p| ≤ τ_max;
 * the pendulum pitch |α| ≤ 15° + 0.15° (the tolerance the PID's tuning is granted because the LMPC's
   softened bound peaks at 15.13°) at every RK4 substep, not only at the samples;
-* the rise is measured exactly as :func:`planner.pendulum.experiments.step_metrics` does it (first
+* the rise is measured exactly as :func:`planner.pendulum.steps.step_metrics` does it (first
   crossings of 10 % and 90 % of V, interpolated between samples);
 * no overshoot: after crossing 90 % the speed stays within [0.9 V, V] for the rest of the horizon
   (0.5 s) — both controllers stay within 3 % of V, the LMPC within 0.1 %.
@@ -35,14 +35,14 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from planner.pendulum.dynamics import G, PendulumParams, PendulumSpherePlant, params_from_profile
-from planner.pendulum.experiments import FIG11_CASES, PITCH_TOLERANCE_RAD, TS_S, speed_step
+from planner.pendulum.steps import FIG11_CASES, PITCH_TOLERANCE_RAD, TS_S, speed_step
 from planner.robot import load_robot
 
 SUBSTEPS = 4
 TAIL = 25
 
 
-def _period(params: PendulumParams, c_rr: float):  # type: ignore[no-untyped-def]
+def _period(params: PendulumParams, c_rr: float):
     """CasADi function (x, u) → (x after one period, the pitch at every substep): the plant's RK4."""
     import casadi as ca
 
@@ -52,7 +52,7 @@ def _period(params: PendulumParams, c_rr: float):  # type: ignore[no-untyped-def
     ja, js = p.inertias("pitch")
     x, u = ca.SX.sym("x", 4), ca.SX.sym("u")
 
-    def f(s):  # type: ignore[no-untyped-def]
+    def f(s):
         a, ad, v = s[0], s[1], s[3]
         fx = c_rr * p.total_mass_kg * G * v / ca.sqrt(v * v + p.rolling_speed_eps_m_s**2)
         rel = p.damping_pitch_n_m_s * (ad + v / r)
@@ -74,7 +74,7 @@ def _period(params: PendulumParams, c_rr: float):  # type: ignore[no-untyped-def
     return ca.Function("period", [x, u], [s, ca.vertcat(*alphas)])
 
 
-def _solve(params, c_rr, speed, i10, d, u0, x0):  # type: ignore[no-untyped-def]
+def _solve(params, c_rr, speed, i10, d, u0, x0):
     """Minimum interpolated rise with the 10 % crossing in period i10 and the 90 % one d periods later."""
     import casadi as ca
 

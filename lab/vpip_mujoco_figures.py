@@ -2,7 +2,7 @@
 
 Run from the repository root (a few minutes on one core)::
 
-    python tools/vpip_mujoco_figures.py --out docs/img            # all figures and docs/img/vpip-mujoco.json
+    python -m lab.vpip_mujoco_figures --out docs/img            # all figures and docs/img/vpip-mujoco.json
 
 1. Held-roll circles at 5°, 10°, 15° (ω = 1 rad/s, 30 s) on the MuJoCo plant → diameters, Fig. 10 style;
    each repeated from six start headings (physically the same run on a flat floor; the spread is the

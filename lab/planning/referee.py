@@ -240,7 +240,7 @@ def _rings(resolution_m: float, radius_m: float) -> tuple[np.ndarray, np.ndarray
 
 
 @dataclass(frozen=True, eq=False)
-class PolygonChecker:
+class FootprintReferee:
     """Exact footprint-polygon collision and clearance on one grid.
 
     Parameters
@@ -262,7 +262,7 @@ class PolygonChecker:
     resolution_m: float
 
     @classmethod
-    def for_robot(cls, grid: OccupancyGrid, robot: RobotProfile, allow_unknown: bool = False) -> PolygonChecker:
+    def for_robot(cls, grid: OccupancyGrid, robot: RobotProfile, allow_unknown: bool = False) -> FootprintReferee:
         """The checker for ``robot.footprint_polygon`` on ``grid`` (unknown cells block unless allowed)."""
         return cls(
             polygon=np.ascontiguousarray(robot.footprint_polygon, dtype=np.float64),

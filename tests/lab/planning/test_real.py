@@ -11,23 +11,19 @@ from dataclasses import asdict, replace
 import numpy as np
 import pytest
 
-from planner.hybrid_astar.bench_polygon import PolygonChecker
-from planner.hybrid_astar.realbench import (
+from lab.planning.real.problems import DrawSettings, RealProblem, draw_problems
+from lab.planning.real.runs import (
     BIT_DUBINS,
     BIT_REEDS_SHEPP,
     SPHEREPLAN,
-    DrawSettings,
-    RealProblem,
     RunRecord,
     _record,
     densify,
-    draw_problems,
-    read_real_csv,
     run_reference,
-    summarise,
     with_reference_lengths,
-    write_real_csv,
 )
+from lab.planning.real.summary import read_real_csv, summarise, write_real_csv
+from lab.planning.referee import FootprintReferee
 from planner.maps.nav2 import load_map
 from planner.occupancy import OccupancyGrid
 from planner.robot import load_robot
@@ -124,7 +120,7 @@ def _problem(grid: OccupancyGrid, start: tuple[float, float, float], goal: tuple
 
 def test_reference_finds_the_straight_path_on_an_open_map() -> None:
     grid = OccupancyGrid.from_occupied(_room(12.0, 2.0), 0.05, name="open")
-    checker = PolygonChecker.for_robot(grid, ROBOT)
+    checker = FootprintReferee.for_robot(grid, ROBOT)
     problem = _problem(grid, (2.0, 1.0, 0.0), (10.0, 1.0, 0.0))
     for planner in (BIT_DUBINS, BIT_REEDS_SHEPP):
         rec = run_reference(problem, grid, ROBOT, checker, planner, 0.5)
@@ -138,7 +134,7 @@ def test_reference_goes_around_a_block_and_a_sealed_goal_stays_unsolved() -> Non
     occ = _room()
     occ[40:80, 100:140] = True  # a 2 m block at x 5–7 m, y 2–4 m, on the straight line
     grid = OccupancyGrid.from_occupied(occ, 0.05, name="block")
-    checker = PolygonChecker.for_robot(grid, ROBOT)
+    checker = FootprintReferee.for_robot(grid, ROBOT)
     rec = run_reference(_problem(grid, (2.0, 3.0, 0.0), (10.0, 3.0, 0.0)), grid, ROBOT, checker, BIT_DUBINS, 1.5)
     assert rec.solved and rec.valid
     assert 8.5 < rec.length_m < 16.0 and rec.length_m <= rec.first_length_m
@@ -150,7 +146,7 @@ def test_reference_goes_around_a_block_and_a_sealed_goal_stays_unsolved() -> Non
     sealed[106:110, 200:] = True
     grid2 = OccupancyGrid.from_occupied(sealed, 0.05, name="sealed")
     rec2 = run_reference(_problem(grid2, (2.0, 3.0, 0.0), (11.0, 3.0, 0.0)), grid2, ROBOT,
-                         PolygonChecker.for_robot(grid2, ROBOT), BIT_REEDS_SHEPP, 0.3)
+                         FootprintReferee.for_robot(grid2, ROBOT), BIT_REEDS_SHEPP, 0.3)
     assert rec2.status == "unsolved" and not rec2.solved and rec2.time_s == 0.3
 
 
@@ -196,7 +192,7 @@ def test_summary_counts_and_medians() -> None:
         _rec(4, BIT_REEDS_SHEPP, "solved", 0.1, length=5.0),
     ]
     grid = OccupancyGrid.from_occupied(_room(), 0.05, name="m")
-    checkers = {"m": PolygonChecker.for_robot(grid, ROBOT)}
+    checkers = {"m": FootprintReferee.for_robot(grid, ROBOT)}
     for reverse, missed, ratio in ((False, 2, 11.0 / 10.5), (True, 3, 11.0 / 10.0)):
         final = with_reference_lengths(records, reverse)
         (s,) = summarise(final, checkers, reverse, {"m": 0.1}, {"m": "240×120"})
@@ -211,7 +207,7 @@ def test_summary_counts_and_medians() -> None:
 
 def test_real_figure_marks_unsolvable_and_explains_the_dashed_line() -> None:
     """bench_real.png (issue #13): proved-unsolvable problems labelled, 1.05 line explained, legends outside."""
-    from planner.hybrid_astar.realbench import real_figure
+    from lab.planning.real.figure import real_figure
     from planner.plotstyle import legend_labels
 
     records = with_reference_lengths([
@@ -238,7 +234,7 @@ def test_refused_pose_that_truly_collides_is_not_counted_as_refused_free() -> No
     grid = OccupancyGrid.from_occupied(occ, 0.05, name="m")
     p = RealProblem("m", 0, (5.0, 3.0, 0.0), (1.0, 1.0, 0.0), 4.5, False)
     rec = replace(_record(p, SPHEREPLAN, "goal_refused", 0.001, 5.0), map="m")
-    (s,) = summarise([rec], {"m": PolygonChecker.for_robot(grid, ROBOT)}, False, {}, {})
+    (s,) = summarise([rec], {"m": FootprintReferee.for_robot(grid, ROBOT)}, False, {}, {})
     assert s.refused_free == 0
 
 

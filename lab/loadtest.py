@@ -1,6 +1,6 @@
 """Load test of the service on loopback: ``/v1/plan`` throughput and latency, Zenoh query round trips.
 
-    python -m service.loadtest [--duration 10] [--concurrency 4] [--workers 1 2] [--zenoh-queries 20]
+    python -m lab.loadtest [--duration 10] [--concurrency 4] [--workers 1 2] [--zenoh-queries 20]
 
 For each worker count it starts ``sphereplan serve`` on free loopback ports (HTTP and a Zenoh peer),
 waits until the pool is warm, then keeps ``--concurrency`` clients posting the shipped problems
@@ -170,7 +170,7 @@ def round_trips(served: Served, body: dict[str, Any], n: int) -> dict[str, list[
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m service.loadtest", description=__doc__.split("\n\n")[0])
+    parser = argparse.ArgumentParser(prog="python -m lab.loadtest", description=__doc__.split("\n\n")[0])
     parser.add_argument("--duration", type=float, default=10.0, help="seconds of load per worker count (10)")
     parser.add_argument("--concurrency", type=int, default=4, help="concurrent HTTP clients (4)")
     parser.add_argument("--workers", type=int, nargs="+", default=[1, 2], help="worker counts to test (1 2)")

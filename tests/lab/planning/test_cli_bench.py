@@ -31,7 +31,7 @@ def test_bench_figure_marks_failed_and_unsolvable_runs():
     dashed 1.05 line and RRT*'s bar explained in the legend."""
     import math
 
-    from planner.hybrid_astar.bench import BenchRow, bench_figure
+    from lab.planning.shipped import BenchRow, bench_figure
     from planner.plotstyle import legend_labels
 
     def row(problem, planner, solvable, success, t, ratio, note=""):

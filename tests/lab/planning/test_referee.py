@@ -1,6 +1,6 @@
 """The benchmark's exact polygon checker against a brute-force rasterisation on random poses.
 
-The brute force (tests/polycheck.py) shares no code with :mod:`planner.hybrid_astar.bench_polygon`: it clips
+The brute force (tests/polycheck.py) shares no code with :mod:`lab.planning.referee`: it clips
 the placed polygon against every nearby blocked cell square (Sutherland–Hodgman) and calls a pose colliding
 when some clipped area is positive or a vertex leaves the map; clearances are vertex-to-edge distances over
 every blocked cell, in numpy.
@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from planner.hybrid_astar.bench_polygon import PolygonChecker
+from lab.planning.referee import FootprintReferee
 from planner.occupancy import OccupancyGrid
 from planner.robot import load_robot
 from tests.polycheck import brute_clearance, brute_collides
@@ -41,7 +41,7 @@ def _random_poses(grid: OccupancyGrid, rng: np.random.Generator, n: int) -> np.n
 def test_collision_matches_brute_force(poly: np.ndarray, allow_unknown: bool) -> None:
     grid = _grid(1)
     rng = np.random.default_rng(7)
-    checker = PolygonChecker(poly.copy(), grid.blocked(allow_unknown), grid.origin[:2], grid.resolution_m)
+    checker = FootprintReferee(poly.copy(), grid.blocked(allow_unknown), grid.origin[:2], grid.resolution_m)
     poses = _random_poses(grid, rng, 250)
     expected = np.array([brute_collides(grid, poly, p, allow_unknown) for p in poses])
     got = checker.collides_many(poses)
@@ -55,7 +55,7 @@ def test_unknown_blocks_unless_allowed_and_leaving_the_map_collides() -> None:
     data[20, 20] = -1
     grid = OccupancyGrid(data=data, resolution_m=0.05)
     robot = load_robot("zju-60")
-    strict, lax = PolygonChecker.for_robot(grid, robot), PolygonChecker.for_robot(grid, robot, allow_unknown=True)
+    strict, lax = FootprintReferee.for_robot(grid, robot), FootprintReferee.for_robot(grid, robot, allow_unknown=True)
     assert strict.collides(1.025, 1.025, 0.3) and not lax.collides(1.025, 1.025, 0.3)
     # 0.32 m from the centre to the padded polygon's front; the map edge at x = 2.0
     assert not lax.collides(2.0 - 0.321, 0.5, 0.0) and lax.collides(2.0 - 0.319, 0.5, 0.0)
@@ -66,7 +66,7 @@ def test_unknown_blocks_unless_allowed_and_leaving_the_map_collides() -> None:
 def test_clearance_matches_brute_force(poly: np.ndarray) -> None:
     grid = _grid(2)
     rng = np.random.default_rng(3)
-    checker = PolygonChecker(poly.copy(), grid.blocked(), grid.origin[:2], grid.resolution_m)
+    checker = FootprintReferee(poly.copy(), grid.blocked(), grid.origin[:2], grid.resolution_m)
     poses = _random_poses(grid, rng, 120)
     expected = np.array([brute_clearance(grid, poly, p, 0.5) for p in poses])
     got = checker.clearances(poses, reach_m=0.5)
@@ -77,6 +77,6 @@ def test_clearance_matches_brute_force(poly: np.ndarray) -> None:
 
 def test_inradius_and_circumradius_of_the_zju_polygon() -> None:
     grid = _grid(0)
-    checker = PolygonChecker.for_robot(grid, load_robot("zju-60"))
+    checker = FootprintReferee.for_robot(grid, load_robot("zju-60"))
     assert checker.inradius_m == pytest.approx(0.32)  # the padded 16-gon's front edge: 0.30 / cos(π/16)·… + 0.02
     assert checker.circumradius_m == pytest.approx(float(np.hypot(ZJU[:, 0], ZJU[:, 1]).max()))

@@ -1,0 +1,116 @@
+"""The real-map benchmark's run: draw the problems on each map, run every planner, summarise."""
+
+from __future__ import annotations
+
+import logging
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from lab.planning.real.problems import DrawSettings, RealProblem, default_time_limit_s, draw_problems, resolve_map
+from lab.planning.real.runs import (
+    BIT_DUBINS,
+    BIT_REEDS_SHEPP,
+    RunRecord,
+    allows_reverse,
+    run_reference,
+    run_sphereplan,
+    with_reference_lengths,
+)
+from lab.planning.real.summary import MapSummary, summarise
+from lab.planning.referee import FootprintReferee
+from planner.errors import (
+    PlanningError,
+)
+from planner.hybrid_astar.plan import plan_path, planner_for
+from planner.hybrid_astar.search import PlannerOptions
+from planner.occupancy import OccupancyGrid
+from planner.robot import RobotProfile
+
+log = logging.getLogger(__name__)
+
+Pose = tuple[float, float, float]
+
+
+@dataclass(frozen=True)
+class RealBenchResult:
+    """Everything one run produced: the rows, the per-map summaries, the problems and the settings."""
+
+    records: tuple[RunRecord, ...]
+    summaries: tuple[MapSummary, ...]
+    problems: tuple[RealProblem, ...]
+    robot: str
+    seed: int
+    reverse_allowed: bool
+
+
+def _warm_up(robot: RobotProfile, options: PlannerOptions) -> None:
+    """Compile the planner and checker kernels on a small open map, so no timed call pays for it."""
+    grid = OccupancyGrid.from_occupied(np.zeros((120, 160), dtype=bool), 0.05, name="warm-up")
+    checker = FootprintReferee.for_robot(grid, robot)
+    checker.collides_many(np.array([[4.0, 3.0, 0.0]]))
+    checker.clearances(np.array([[4.0, 3.0, 0.0]]))
+    try:
+        plan_path(grid, robot, (1.5, 3.0, 0.0), (6.0, 3.0, 0.0), options, time_limit_s=60.0)
+    except PlanningError as exc:  # only compilation matters here
+        log.warning("warm-up plan failed: %s", exc)
+
+
+def run_real_bench(
+    maps: Sequence[str | Path], robot: RobotProfile, per_map: int, seed: int, *,
+    time_limit_s: float | None = None, options: PlannerOptions | None = None, reference: bool = True,
+    settings: DrawSettings | None = None, progress: Callable[[str], None] | None = None,
+) -> RealBenchResult:
+    """Draw ``per_map`` problems on each map (one ``numpy.random.default_rng(seed)`` for the whole run, maps
+    in the given order) and run sphereplan and, with ``reference``, BIT* on Dubins and Reeds–Shepp.
+
+    ``time_limit_s`` None gives each map :func:`default_time_limit_s`. ``progress`` is called after every
+    single planner run with a short label.
+    """
+    from planner.maps.nav2 import load_map
+
+    opts = options or PlannerOptions()
+    reverse_allowed = allows_reverse(opts, robot)
+    rng = np.random.default_rng(seed)
+    if reference:
+        from ompl import util as ou
+
+        ou.setLogLevel(ou.LOG_ERROR)
+        ou.RNG.setSeed(seed + 1)  # effective only before OMPL's first random number in this process
+    _warm_up(robot, opts)
+    records: list[RunRecord] = []
+    drawn: list[RealProblem] = []
+    checkers: dict[str, FootprintReferee] = {}
+    setup: dict[str, float] = {}
+    cells: dict[str, str] = {}
+    for spec in maps:
+        path = spec if isinstance(spec, Path) else resolve_map(spec)
+        grid = load_map(path)
+        name = grid.name
+        checker = FootprintReferee.for_robot(grid, robot, opts.allow_unknown)
+        checkers[name] = checker
+        cells[name] = f"{grid.width}×{grid.height}"
+        limit = time_limit_s if time_limit_s is not None else default_time_limit_s(grid)
+        problems = draw_problems(grid, robot, per_map, rng, map_name=name, allow_unknown=opts.allow_unknown,
+                                 settings=settings, checker=checker)
+        drawn.extend(problems)
+        t0 = time.perf_counter()
+        planner_for(grid, robot, opts)  # distance transform and heuristic grids, once per map, not timed per plan
+        setup[name] = time.perf_counter() - t0
+        log.info("%s: %d problems drawn, planner set up in %.2f s, limit %.1f s", name, len(problems),
+                 setup[name], limit)
+        for problem in problems:
+            records.append(run_sphereplan(problem, grid, robot, checker, opts, limit))
+            if progress:
+                progress(f"{problem.name} sphereplan")
+            if reference:
+                for planner in (BIT_DUBINS, BIT_REEDS_SHEPP):
+                    records.append(run_reference(problem, grid, robot, checker, planner, limit))
+                    if progress:
+                        progress(f"{problem.name} {planner}")
+    final = with_reference_lengths(records, reverse_allowed)
+    summaries = summarise(final, checkers, reverse_allowed, setup, cells)
+    return RealBenchResult(tuple(final), tuple(summaries), tuple(drawn), robot.name, seed, reverse_allowed)

@@ -1,0 +1,250 @@
+"""Running one drawn problem: sphereplan, and OMPL BIT* on Dubins and Reeds–Shepp as the reference.
+
+Every path (sphereplan's and BIT*'s) is re-checked with the referee's exact polygon on states at most half a
+cell apart, and its true footprint clearance is measured with the same polygon.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import time
+from collections.abc import Sequence
+from dataclasses import dataclass, fields, replace
+from typing import Any
+
+import numpy as np
+
+from lab.planning.real.problems import RealProblem
+from lab.planning.referee import FootprintReferee
+from lab.planning.shipped import bounded_to
+from planner.errors import (
+    GoalOccupied,
+    NoValidPathFound,
+    PlannerTimedOut,
+    PlanningError,
+    StartOccupied,
+)
+from planner.hybrid_astar.plan import plan_path
+from planner.hybrid_astar.search import PlannerOptions
+from planner.occupancy import OccupancyGrid
+from planner.robot import RobotProfile
+
+log = logging.getLogger(__name__)
+
+Pose = tuple[float, float, float]
+
+
+SPHEREPLAN = "sphereplan"
+BIT_DUBINS = "bitstar-dubins"
+BIT_REEDS_SHEPP = "bitstar-reeds-shepp"
+REFERENCE_SPACES = {BIT_DUBINS: "dubins", BIT_REEDS_SHEPP: "reeds-shepp"}
+SHORT_NAMES = {SPHEREPLAN: "sp", BIT_DUBINS: "D", BIT_REEDS_SHEPP: "RS"}
+
+
+# ------------------------------------------------------------------------------------------------- running
+
+
+@dataclass(frozen=True)
+class RunRecord:
+    """One problem × one planner: a row of the CSV (columns in field order; units in the names).
+
+    ``status``: sphereplan ``solved``, ``timeout``, ``no_path``, ``start_refused``, ``goal_refused`` or
+    ``error``; BIT* ``solved`` or ``unsolved``. ``solved`` additionally needs the path to pass the exact
+    polygon check (``valid``). ``time_s``: sphereplan's wall time of the call (success or failure); BIT*'s
+    time to its first solution (the whole limit when it found none). ``first_length_m``: BIT*'s first
+    solution; ``length_m``: the final path (BIT* after the whole limit). ``reference_length_m``: the
+    shortest BIT* path among the spaces allowed to sphereplan's motions (Dubins; also Reeds–Shepp when it
+    may reverse); ``length_ratio`` = ``length_m`` / it. ``min_clearance_m``: the padded footprint's exact
+    distance to the nearest blocked cell or map edge along the path (capped at 1 m); ``reported_clearance_m``:
+    what sphereplan's result says. ``expansions``: sphereplan's, from the result or the failure message (−1
+    unknown).
+    """
+
+    map: str
+    problem: int
+    start_x: float
+    start_y: float
+    start_yaw: float
+    goal_x: float
+    goal_y: float
+    goal_yaw: float
+    distance_m: float
+    disconnected: bool
+    planner: str
+    status: str
+    solved: bool
+    time_s: float
+    time_limit_s: float
+    first_length_m: float
+    length_m: float
+    reference_length_m: float
+    length_ratio: float
+    min_clearance_m: float
+    reported_clearance_m: float
+    valid: bool
+    reverses: bool
+    expansions: int
+    message: str
+
+
+CSV_COLUMNS = tuple(f.name for f in fields(RunRecord))
+
+
+def _record(problem: RealProblem, planner: str, status: str, time_s: float, time_limit_s: float, *,
+            valid: bool = False, first_length_m: float = math.nan, length_m: float = math.nan,
+            min_clearance_m: float = math.nan, reported_clearance_m: float = math.nan, reverses: bool = False,
+            expansions: int = -1, message: str = "") -> RunRecord:
+    return RunRecord(
+        map=problem.map_name, problem=problem.index, start_x=problem.start[0], start_y=problem.start[1],
+        start_yaw=problem.start[2], goal_x=problem.goal[0], goal_y=problem.goal[1], goal_yaw=problem.goal[2],
+        distance_m=problem.distance_m, disconnected=problem.disconnected, planner=planner, status=status,
+        solved=status == "solved" and valid, time_s=time_s, time_limit_s=time_limit_s,
+        first_length_m=first_length_m, length_m=length_m, reference_length_m=math.nan, length_ratio=math.nan,
+        min_clearance_m=min_clearance_m, reported_clearance_m=reported_clearance_m, valid=valid,
+        reverses=reverses, expansions=expansions, message=message,
+    )
+
+
+def densify(poses: np.ndarray, spacing_m: float) -> np.ndarray:
+    """Poses (n, ≥ 3: x, y, yaw) with extra poses interpolated so consecutive ones are ≤ ``spacing_m`` apart
+    (x, y linearly; yaw along the shorter way round). Returns (m, 3)."""
+    p = np.asarray(poses, dtype=float)[:, :3]
+    if len(p) < 2:
+        return p.copy()
+    step = np.hypot(np.diff(p[:, 0]), np.diff(p[:, 1]))
+    parts = np.maximum(1, np.ceil(step / spacing_m).astype(int))
+    d_yaw = np.remainder(np.diff(p[:, 2]) + math.pi, 2 * math.pi) - math.pi
+    out = [p[:1]]
+    for i, k in enumerate(parts):
+        t = (np.arange(1, k + 1) / k)[:, None]
+        seg = p[i] + t * np.array([p[i + 1, 0] - p[i, 0], p[i + 1, 1] - p[i, 1], d_yaw[i]])
+        out.append(seg)
+    dense = np.concatenate(out)
+    dense[:, 2] = np.remainder(dense[:, 2] + math.pi, 2 * math.pi) - math.pi
+    return dense
+
+
+def _reverses(poses: np.ndarray) -> bool:
+    """Does the path move against its heading anywhere (by more than a millimetre)?"""
+    d = np.diff(poses[:, :2], axis=0)
+    along = d[:, 0] * np.cos(poses[:-1, 2]) + d[:, 1] * np.sin(poses[:-1, 2])
+    return bool((along < -1e-3).any())
+
+
+def allows_reverse(options: PlannerOptions, robot: RobotProfile) -> bool:
+    """Whether sphereplan may reverse with these options (``allow_reverse``; None means the profile's
+    ``reversible``)."""
+    value = getattr(options, "allow_reverse", False)
+    return bool(robot.reversible if value is None else value)
+
+
+def run_sphereplan(problem: RealProblem, grid: OccupancyGrid, robot: RobotProfile, checker: FootprintReferee,
+                   options: PlannerOptions, time_limit_s: float) -> RunRecord:
+    """One ``plan_path`` call, timed by the wall clock; the path re-checked and measured with the polygon."""
+    t0 = time.perf_counter()
+    try:
+        result = plan_path(grid, robot, problem.start, problem.goal, options, time_limit_s=time_limit_s)
+    except PlanningError as exc:
+        elapsed = time.perf_counter() - t0
+        if isinstance(exc, StartOccupied):
+            status = "start_refused"
+        elif isinstance(exc, GoalOccupied):
+            status = "goal_refused"
+        elif isinstance(exc, PlannerTimedOut):
+            status = "timeout"
+        elif isinstance(exc, NoValidPathFound):
+            status = "no_path"
+        else:
+            status = "error"
+        log.info("%s sphereplan %s after %.3f s: %s", problem.name, status, elapsed, exc.msg)
+        return _record(problem, SPHEREPLAN, status, elapsed, time_limit_s,
+                       expansions=exc.expansions, message=exc.msg)
+    elapsed = time.perf_counter() - t0
+    dense = densify(result.states[:, :3], 0.5 * grid.resolution_m)
+    hits = checker.collides_many(dense)
+    valid = not bool(hits.any())
+    message = "" if valid else f"the padded footprint meets an obstacle at {int(hits.sum())} of {len(dense)} poses"
+    log.info("%s sphereplan solved in %.3f s, %.2f m%s", problem.name, elapsed, result.length_m,
+             "" if valid else " (" + message + ")")
+    return _record(problem, SPHEREPLAN, "solved", elapsed, time_limit_s, valid=valid,
+                   first_length_m=result.length_m, length_m=result.length_m,
+                   min_clearance_m=checker.min_clearance(dense), reported_clearance_m=result.min_clearance_m,
+                   reverses=bool((result.states[:, 4] < 0).any()), expansions=int(result.expansions),
+                   message=message)
+
+
+def run_reference(problem: RealProblem, grid: OccupancyGrid, robot: RobotProfile, checker: FootprintReferee,
+                  planner: str, time_limit_s: float) -> RunRecord:
+    """OMPL BIT* (``planner`` = :data:`BIT_DUBINS` or :data:`BIT_REEDS_SHEPP`) at the robot's minimum turning
+    radius with the exact polygon validity check: time to the first solution, then optimising until
+    ``time_limit_s``; motions are checked every half cell of arc length."""
+    from ompl import base as ob
+    from ompl import geometric as og
+    from ompl import util as ou
+
+    from lab.planning.referee import _collides_pose
+
+    ou.setLogLevel(ou.LOG_ERROR)
+    rho = robot.min_turning_radius_m
+    space = bounded_to(ob.DubinsStateSpace(rho) if planner == BIT_DUBINS else ob.ReedsSheppStateSpace(rho), grid)
+    setup = og.SimpleSetup(space)
+    poly, blocked = checker.polygon, checker.blocked
+    ox, oy, res, reach = checker.origin_xy[0], checker.origin_xy[1], checker.resolution_m, checker.circumradius_m
+
+    def valid(state: Any) -> bool:
+        return not _collides_pose(poly, state.getX(), state.getY(), state.getYaw(), blocked, ox, oy, res, reach)
+
+    setup.setStateValidityChecker(valid)
+    info = setup.getSpaceInformation()
+    info.setStateValidityCheckingResolution(0.5 * res / space.getMaximumExtent())
+    start, goal = space.allocState(), space.allocState()
+    for st, pose in ((start, problem.start), (goal, problem.goal)):
+        st.setX(pose[0])
+        st.setY(pose[1])
+        st.setYaw(math.remainder(pose[2], 2 * math.pi) if pose[2] < math.pi else -math.pi)  # OMPL: [−π, π)
+    setup.setStartAndGoalStates(start, goal, 0.01)
+    pdef = setup.getProblemDefinition()
+    bit = og.BITstar(info)
+    bit.setStopOnSolnImprovement(True)  # BIT* publishes a solution when solve() returns: stop at the first
+    setup.setPlanner(bit)
+    t0 = time.perf_counter()
+    setup.solve(time_limit_s)
+    first = time.perf_counter() - t0
+    if not pdef.hasExactSolution():
+        log.info("%s %s: no solution in %.1f s", problem.name, planner, time_limit_s)
+        return _record(problem, planner, "unsolved", time_limit_s, time_limit_s, message="no solution in time")
+    first_length = float(setup.getSolutionPath().length())
+    bit.setStopOnSolnImprovement(False)
+    if time_limit_s - first > 0.05:
+        setup.solve(time_limit_s - first)
+    path = setup.getSolutionPath()
+    length = float(path.length())
+    path.interpolate(max(2, math.ceil(length / (0.5 * res)) + 1))
+    poses = np.array([[path.getState(i).getX(), path.getState(i).getY(), path.getState(i).getYaw()]
+                      for i in range(path.getStateCount())])
+    dense = densify(poses, 0.5 * res)
+    hits = checker.collides_many(dense)
+    ok = not bool(hits.any())
+    log.info("%s %s: first %.3f s (%.2f m), final %.2f m", problem.name, planner, first, first_length, length)
+    return _record(problem, planner, "solved", first, time_limit_s, valid=ok, first_length_m=first_length,
+                   length_m=length, min_clearance_m=checker.min_clearance(dense), reverses=_reverses(dense),
+                   message="" if ok else f"path meets an obstacle at {int(hits.sum())} interpolated poses")
+
+
+def with_reference_lengths(records: Sequence[RunRecord], reverse_allowed: bool) -> list[RunRecord]:
+    """Fill ``reference_length_m`` and ``length_ratio`` of every record of each problem: the shortest solved
+    BIT* path among Dubins (and Reeds–Shepp when sphereplan may reverse)."""
+    spaces = {BIT_DUBINS, BIT_REEDS_SHEPP} if reverse_allowed else {BIT_DUBINS}
+    best: dict[tuple[str, int], float] = {}
+    for r in records:
+        if r.planner in spaces and r.solved:
+            key = (r.map, r.problem)
+            best[key] = min(best.get(key, math.inf), r.length_m)
+    out = []
+    for r in records:
+        ref = best.get((r.map, r.problem), math.nan)
+        out.append(replace(r, reference_length_m=ref, length_ratio=r.length_m / ref if r.solved else math.nan))
+    return out
+
+

@@ -1,0 +1,216 @@
+"""The real-map benchmark's per-map summaries, its table and its CSV."""
+
+from __future__ import annotations
+
+import csv
+import logging
+import math
+import statistics
+from collections.abc import Sequence
+from dataclasses import asdict, dataclass, fields
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from lab.planning.real.runs import BIT_DUBINS, BIT_REEDS_SHEPP, CSV_COLUMNS, REFERENCE_SPACES, SPHEREPLAN, RunRecord
+from lab.planning.referee import FootprintReferee
+
+log = logging.getLogger(__name__)
+
+Pose = tuple[float, float, float]
+
+
+# ----------------------------------------------------------------------------------------------- summaries
+
+
+@dataclass(frozen=True)
+class MapSummary:
+    """The per-map line of the table (times in s, lengths as ratios, clearances in m; nan where empty).
+
+    ``bit_solved``: solved by BIT* on either space; ``missed``: solved by the reference for sphereplan's
+    motions (Dubins, plus Reeds–Shepp when it may reverse) but not by sphereplan; ``refused_free``: starts or
+    goals sphereplan called "in collision" although the padded polygon is free there (all drawn poses are);
+    ``unsolved_*``: problems nobody solved and sphereplan did not refuse (``unsolved_time_p50_s``: how long
+    sphereplan took to give up on them: timeout, no path or another planning error); ``time_*``: sphereplan
+    on the problems it solved; ``both_*``: medians over the problems both sphereplan and the reference solved;
+    ``clearance_*``: medians over sphereplan's solved problems of the path's least clearance, true (polygon)
+    and as reported.
+    """
+
+    map: str
+    cells: str
+    time_limit_s: float
+    setup_s: float
+    problems: int
+    disconnected: int
+    bit_dubins: int
+    bit_reeds_shepp: int
+    bit_solved: int
+    sphereplan: int
+    missed: int
+    refused_free: int
+    timeouts: int
+    bad_paths: int
+    time_p50_s: float
+    time_p95_s: float
+    both_sphereplan_p50_s: float
+    both_bit_first_p50_s: float
+    unsolved: int
+    unsolved_time_p50_s: float
+    length_ratio_median: float
+    length_ratio_max: float
+    clearance_median_m: float
+    reported_clearance_median_m: float
+
+
+def _median(values: Sequence[float]) -> float:
+    return float(statistics.median(values)) if values else math.nan
+
+
+def _p95(values: Sequence[float]) -> float:
+    return float(np.percentile(values, 95)) if values else math.nan
+
+
+def summarise(records: Sequence[RunRecord], checkers: dict[str, FootprintReferee], reverse_allowed: bool,
+              setup_s: dict[str, float], cells: dict[str, str]) -> list[MapSummary]:
+    """One :class:`MapSummary` per map (in first-seen order), then one named ``all`` over every map."""
+    spaces = {BIT_DUBINS, BIT_REEDS_SHEPP} if reverse_allowed else {BIT_DUBINS}
+    maps = list(dict.fromkeys(r.map for r in records))
+    out = [_summary(m, [r for r in records if r.map == m], checkers.get(m), spaces, setup_s.get(m, math.nan),
+                    cells.get(m, "")) for m in maps]
+    if len(maps) > 1:
+        out.append(_summary("all", list(records), None, spaces, sum(setup_s.get(m, 0.0) for m in maps), "",
+                            checkers))
+    return out
+
+
+def _summary(name: str, records: list[RunRecord], checker: FootprintReferee | None, spaces: set[str],
+             setup_s: float, cells: str, checkers: dict[str, FootprintReferee] | None = None) -> MapSummary:
+    by_problem: dict[tuple[str, int], dict[str, RunRecord]] = {}
+    for r in records:
+        by_problem.setdefault((r.map, r.problem), {})[r.planner] = r
+    ours = [g[SPHEREPLAN] for g in by_problem.values() if SPHEREPLAN in g]
+    solved = [r for r in ours if r.solved]
+
+    def ref_solved(group: dict[str, RunRecord], allowed: set[str]) -> list[RunRecord]:
+        return [group[p] for p in allowed if p in group and group[p].solved]
+
+    refused_free = 0
+    for r in ours:
+        if r.status not in ("start_refused", "goal_refused"):
+            continue
+        check = checker or (checkers or {}).get(r.map)
+        pose = (r.start_x, r.start_y, r.start_yaw) if r.status == "start_refused" else (r.goal_x, r.goal_y, r.goal_yaw)
+        if check is None or not check.collides(*pose):
+            refused_free += 1
+    both_ours, both_bit, unsolved_times = [], [], []
+    missed = 0
+    for g in by_problem.values():
+        mine = g.get(SPHEREPLAN)
+        refs = ref_solved(g, spaces)
+        if mine is not None and refs and not mine.solved:
+            missed += 1
+        if mine is not None and refs and mine.solved:
+            both_ours.append(mine.time_s)
+            both_bit.append(min(r.time_s for r in refs))
+        anyone = (mine is not None and mine.solved) or bool(ref_solved(g, set(REFERENCE_SPACES)))
+        if not anyone and mine is not None and mine.status in ("timeout", "no_path", "error"):
+            unsolved_times.append(mine.time_s)
+    ratios = [r.length_ratio for r in solved if math.isfinite(r.length_ratio)]
+    limits = sorted({r.time_limit_s for r in records})
+    return MapSummary(
+        map=name, cells=cells, time_limit_s=limits[0] if len(limits) == 1 else math.nan, setup_s=setup_s,
+        problems=len(by_problem), disconnected=sum(1 for g in by_problem.values()
+                                                   if next(iter(g.values())).disconnected),
+        bit_dubins=sum(1 for g in by_problem.values() if BIT_DUBINS in g and g[BIT_DUBINS].solved),
+        bit_reeds_shepp=sum(1 for g in by_problem.values() if BIT_REEDS_SHEPP in g and g[BIT_REEDS_SHEPP].solved),
+        bit_solved=sum(1 for g in by_problem.values() if ref_solved(g, set(REFERENCE_SPACES))),
+        sphereplan=len(solved), missed=missed, refused_free=refused_free,
+        timeouts=sum(1 for r in ours if r.status == "timeout"),
+        bad_paths=sum(1 for r in ours if r.status == "solved" and not r.valid),
+        time_p50_s=_median([r.time_s for r in solved]), time_p95_s=_p95([r.time_s for r in solved]),
+        both_sphereplan_p50_s=_median(both_ours), both_bit_first_p50_s=_median(both_bit),
+        unsolved=len(unsolved_times), unsolved_time_p50_s=_median(unsolved_times),
+        length_ratio_median=_median(ratios), length_ratio_max=max(ratios) if ratios else math.nan,
+        clearance_median_m=_median([r.min_clearance_m for r in solved]),
+        reported_clearance_median_m=_median([r.reported_clearance_m for r in solved]),
+    )
+
+
+TABLE_COLUMNS = (
+    ("map", "map"), ("cells", "cells"), ("limit s", "time limit given to each planner"),
+    ("setup s", "building sphereplan's planner for the map (once, not in the plan times)"),
+    ("n", "problems"), ("disc", "proven unreachable (disconnected)"),
+    ("BIT*D", "solved by BIT* on Dubins"), ("BIT*RS", "solved by BIT* on Reeds–Shepp"),
+    ("BIT*", "solved by BIT* (either)"), ("sp", "solved by sphereplan"),
+    ("missed", "solved by the reference for sphereplan's motions, not by sphereplan"),
+    ("refused", "free start/goal refused as in collision"), ("t/o", "sphereplan timeouts"),
+    ("bad", "sphereplan paths the exact polygon check rejects"),
+    ("p50 s", "sphereplan time p50, solved"), ("p95 s", "sphereplan time p95, solved"),
+    ("both sp", "sphereplan p50 where both solved"), ("both BIT*", "BIT* first-solution p50 where both solved"),
+    ("unsolved", "problems nobody solved (sphereplan timed out or found none)"),
+    ("give-up s", "sphereplan p50 time to give up on them"),
+    ("len med", "length ÷ reference, median"), ("len max", "length ÷ reference, max"),
+    ("clear m", "sphereplan's true footprint clearance, median"),
+    ("rep m", "sphereplan's reported min_clearance_m, median"),
+)
+
+
+def _fmt(value: float, digits: int = 2) -> str:
+    return "–" if not math.isfinite(value) else f"{value:.{digits}f}"
+
+
+def format_real_table(summaries: Sequence[MapSummary]) -> str:
+    """The per-map table (fixed-width text) with a legend of the columns."""
+    rows = []
+    for s in summaries:
+        rows.append([
+            s.map, s.cells, _fmt(s.time_limit_s, 0), _fmt(s.setup_s, 2), str(s.problems), str(s.disconnected),
+            str(s.bit_dubins), str(s.bit_reeds_shepp), str(s.bit_solved), str(s.sphereplan), str(s.missed),
+            str(s.refused_free), str(s.timeouts), str(s.bad_paths), _fmt(s.time_p50_s, 3), _fmt(s.time_p95_s, 3),
+            _fmt(s.both_sphereplan_p50_s, 3), _fmt(s.both_bit_first_p50_s, 3), str(s.unsolved),
+            _fmt(s.unsolved_time_p50_s, 3), _fmt(s.length_ratio_median, 3), _fmt(s.length_ratio_max, 3),
+            _fmt(s.clearance_median_m, 3), _fmt(s.reported_clearance_median_m, 3),
+        ])
+    head = [c[0] for c in TABLE_COLUMNS]
+    widths = [max(len(head[i]), *(len(r[i]) for r in rows)) for i in range(len(head))]
+    line = "  ".join(h.ljust(widths[i]) if i < 2 else h.rjust(widths[i]) for i, h in enumerate(head))
+    out = [line, "-" * len(line)]
+    for r in rows:
+        out.append("  ".join(v.ljust(widths[i]) if i < 2 else v.rjust(widths[i]) for i, v in enumerate(r)))
+    out.append("")
+    out.extend(f"  {short:9s} {long}" for short, long in TABLE_COLUMNS[2:])
+    return "\n".join(out)
+
+
+def write_real_csv(records: Sequence[RunRecord], path: str | Path) -> None:
+    """One row per problem × planner, columns :data:`CSV_COLUMNS`."""
+    with open(path, "w", newline="") as fh:
+        writer = csv.DictWriter(fh, fieldnames=list(CSV_COLUMNS))
+        writer.writeheader()
+        for r in records:
+            writer.writerow(asdict(r))
+
+
+def read_real_csv(path: str | Path) -> list[RunRecord]:
+    """The records of a CSV written by :func:`write_real_csv` (to re-plot or re-summarise a run)."""
+    types = {f.name: f.type for f in fields(RunRecord)}
+    out = []
+    with open(path, newline="") as fh:
+        for row in csv.DictReader(fh):
+            values: dict[str, Any] = {}
+            for key, text in row.items():
+                kind = types[key]
+                if kind == "bool":
+                    values[key] = text == "True"
+                elif kind == "int":
+                    values[key] = int(text)
+                elif kind == "float":
+                    values[key] = float(text)
+                else:
+                    values[key] = text
+            out.append(RunRecord(**values))
+    return out
+
+
