@@ -26,6 +26,7 @@ from planner.maps.load import load_any
 from planner.maps.problems import Problem
 from planner.occupancy import OccupancyGrid
 from planner.robot import RobotProfile
+from planner.termination import Termination
 
 
 @dataclass
@@ -63,7 +64,7 @@ def bench_hybrid(problem: Problem, grid: OccupancyGrid, robot: RobotProfile, run
     for i in range(runs + 1):
         t0 = time.perf_counter()
         try:
-            result = plan_path(grid, robot, problem.start, problem.goal, time_limit_s=problem.time_limit_s)
+            result = plan_path(grid, robot, problem.start, problem.goal, termination=Termination(problem.time_limit_s))
         except PlanningError as exc:
             result = None
             note = f"{exc.code}: {exc.msg[:60]}"
