@@ -45,9 +45,9 @@ from service.jobs import (
     warm_up_job,
     worker_init,
 )
-from service.outcome import Outcome, ServiceBusy, error_outcome, outcome_of_exception
+from service.outcome import Outcome, ServiceBusy, WorkerLost, error_outcome, outcome_of_exception
 from service.pipeline import MAX_RESULT_STATES, PlanQuery
-from service.pool import START_TIMEOUT_S, SupervisedPool, WorkerDied
+from service.pool import START_TIMEOUT_S, SupervisedPool
 from service.settings import ServiceSettings
 from service.wire import (
     InlineGrid,
@@ -180,9 +180,9 @@ class PlanningService:
                 outcome = error_outcome(ServiceBusy, "the service is shutting down")
             elif (exc := job.exception()) is None:
                 outcome = job.result()
-            elif isinstance(exc, WorkerDied):
+            elif isinstance(exc, WorkerLost):  # a server fault: 503, the request may be sent again
                 log.error("job %s failed: %s", getattr(fn, "__name__", fn), exc)
-                outcome = error_outcome(WorkerDied, "a worker process died while running this job")
+                outcome = outcome_of_exception(exc)
             elif isinstance(exc, RuntimeError) and self._closing:
                 outcome = error_outcome(ServiceBusy, "the service is shutting down")
             else:

@@ -73,7 +73,7 @@ def _error(status: int, msg: str, field: str | None = None, headers: dict[str, s
 
 def outcome_response(outcome: Outcome, retry_after_s: int = 1) -> Response:
     """An :class:`Outcome` as an HTTP response with its row's status; the body bytes are sent as they are."""
-    headers = {"Retry-After": str(retry_after_s)} if outcome.kind == "busy" else None
+    headers = {"Retry-After": str(retry_after_s)} if outcome.kind in ("busy", "unavailable") else None
     return Response(outcome.body, outcome.answer.http_status, headers, media_type=JSON)
 
 
