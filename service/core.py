@@ -63,8 +63,6 @@ from service.wire import (
 
 log = logging.getLogger(__name__)
 
-#: farthest reconfiguration goal, in sphere radii from the start (paper 004's examples are a few radii)
-MAX_RECONFIGURE_RADII = 200
 #: added to a plan's time limit for the pool's hard deadline: loading the map (a mesh's first load) is not
 #: part of the time limit, the search, smoothing and result building are (the job checks those itself)
 MAP_LOAD_ALLOWANCE_S = 10.0
@@ -313,15 +311,10 @@ class PlanningService:
                             request.seed, request.noise, options)
 
     def submit_reconfigure(self, request: ReconfigureIn) -> Future[Outcome]:
-        """Queue a Spherobot reconfiguration (optionally checked against a map). The goal may be at most
-        ``MAX_RECONFIGURE_RADII`` sphere radii from the start: the rolled result is sampled along the way,
-        so its size and cost grow with distance / radius."""
+        """Queue a Spherobot reconfiguration (optionally checked against a map). The request itself bounds the
+        radius and the goal's distance (``planner.spherobot.request.MAX_RADII`` sphere radii from the start: the
+        rolled result is sampled along the way, so its size and cost grow with distance / radius)."""
         problem = ReconfigureRequest.from_dict(request.model_dump(exclude={"map"}))
-        assert problem.radius_m is not None
-        distance, farthest = math.dist(problem.start, problem.goal), MAX_RECONFIGURE_RADII * problem.radius_m
-        if distance > farthest:
-            raise InvalidInput("goal", f"is {distance:.3g} m from the start; this server rolls at most "
-                                       f"{MAX_RECONFIGURE_RADII} sphere radii ({farthest:.3g} m)")
         return self._submit(reconfigure_job, problem, None if request.map is None else self._map_source(request.map))
 
     def submit_vpip_rods(self, request: VpipRodsRequest) -> Future[Outcome]:

@@ -42,6 +42,7 @@ from starlette.exceptions import HTTPException as StarletteHTTPException
 from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
 from service.core import PlanningService
+from service.limits import SMALL_BODY_BYTES, MalformedBody, ParseGate, parse_json_model
 from service.outcome import ANSWERS, Outcome, error_body, outcome_of_exception
 from service.settings import ServiceSettings
 from service.wire import (
@@ -103,6 +104,70 @@ async def answer(request: Request, service: PlanningService, submit: Callable[[M
         service.cancel(future)
         raise
     return outcome_response(await waiter, service.settings.retry_after_s)
+
+
+class BodyRefused(Exception):
+    """An HTTP-level refusal of a body (415 not JSON, 400 empty or malformed), answered with the error JSON."""
+
+    def __init__(self, status: int, msg: str, field: str) -> None:
+        super().__init__(msg)
+        self.status, self.msg, self.field = status, msg, field
+
+
+def json_body(model: type[M]) -> Callable[[Request], Any]:
+    """A dependency that reads the request body as ``model`` (documented in OpenAPI by :func:`body_doc`).
+
+    The body is bounded by :class:`BodyLimit`; a small one is parsed on the event loop, a large one (an inline
+    map) in the parse pool of :mod:`service.limits` (at most ``PARSE_CONCURRENCY`` at once, further ones wait,
+    beyond ``MAX_PENDING_PARSES`` 503), so health probes and small requests never wait behind big bodies."""
+
+    async def read(request: Request) -> Any:
+        content_type = request.headers.get("content-type", "").split(";")[0].strip().lower()
+        if not (content_type == JSON or content_type.endswith("+json")):
+            got = repr(content_type) if content_type else "none"
+            raise BodyRefused(415, f"Content-Type must be {JSON}, got {got}", "content-type")
+        raw = await request.body()
+        limit = get_service(request).settings.max_body_bytes
+        try:
+            if len(raw) <= SMALL_BODY_BYTES:
+                return parse_json_model(model, raw, limit)
+            gate: ParseGate = request.app.state.parse_gate
+            return await asyncio.wrap_future(gate.submit(lambda: parse_json_model(model, raw, limit)))
+        except MalformedBody as exc:
+            raise BodyRefused(400, exc.msg, exc.field) from None
+
+    read.__name__ = f"{model.__name__}_body"
+    return read
+
+
+#: the request models documented through :func:`body_doc` (added to the OpenAPI components by create_app)
+_BODY_MODELS: list[type[BaseModel]] = []
+
+
+def body_doc(model: type[BaseModel]) -> dict[str, Any]:
+    """The OpenAPI ``requestBody`` of a route that reads ``model`` with :func:`json_body`."""
+    _BODY_MODELS.append(model)
+    return {"requestBody": {"required": True, "content": {JSON: {"schema": {
+        "$ref": f"#/components/schemas/{model.__name__}"}}}}}
+
+
+def _openapi_with_bodies(app: FastAPI) -> Callable[[], dict[str, Any]]:
+    from pydantic.json_schema import models_json_schema
+
+    build = app.openapi
+
+    def openapi() -> dict[str, Any]:
+        if app.openapi_schema is None:
+            schema = build()
+            _, defs = models_json_schema([(m, "validation") for m in dict.fromkeys(_BODY_MODELS)],
+                                         ref_template="#/components/schemas/{model}")
+            components = schema.setdefault("components", {}).setdefault("schemas", {})
+            for name, definition in defs.get("$defs", {}).items():
+                components.setdefault(name, definition)
+            app.openapi_schema = schema
+        return app.openapi_schema
+
+    return openapi
 
 
 class BodyLimit:
@@ -187,6 +252,15 @@ def get_service(request: Request) -> PlanningService:
 
 
 Service = Annotated[PlanningService, Depends(get_service)]
+
+
+# request bodies, read by json_body (off the event loop when large)
+PlanBody = Annotated[PlanRequest, Depends(json_body(PlanRequest))]
+SimulateBody = Annotated[SimulateRequest, Depends(json_body(SimulateRequest))]
+ReconfigureBody = Annotated[ReconfigureIn, Depends(json_body(ReconfigureIn))]
+VpipRodsBody = Annotated[VpipRodsRequest, Depends(json_body(VpipRodsRequest))]
+VpipScheduleBody = Annotated[VpipScheduleRequest, Depends(json_body(VpipScheduleRequest))]
+TensegrityStaticBody = Annotated[TensegrityStaticRequest, Depends(json_body(TensegrityStaticRequest))]
 MapName = Annotated[str, PathParam(pattern=NAME_PATTERN, description="a map in the maps folder")]
 ERRORS: dict[int | str, dict[str, Any]] = {
     code: {"model": ErrorBody, "description": text} for code, text in
@@ -216,8 +290,8 @@ async def readyz(service: Service) -> Any:
 plan = APIRouter(prefix="/v1", tags=["plan"])
 
 
-@plan.post("/plan", response_model=PlanResultOut, responses=ERRORS)
-async def post_plan(request: Request, body: PlanRequest, service: Service) -> Response:
+@plan.post("/plan", response_model=PlanResultOut, responses=ERRORS, openapi_extra=body_doc(PlanRequest))
+async def post_plan(request: Request, body: PlanBody, service: Service) -> Response:
     """Plan a rollable path from ``start`` to ``goal`` on a named map (or an inline grid, at most
     ``max_inline_cells`` cells). Answers the plan result JSON — the same object ``sphereplan plan``
     prints. A failed plan answers 422 with the failed-result JSON and its Nav2 code."""
@@ -227,8 +301,8 @@ async def post_plan(request: Request, body: PlanRequest, service: Service) -> Re
 simulate = APIRouter(prefix="/v1", tags=["simulate"])
 
 
-@simulate.post("/simulate", responses=ERRORS)
-async def post_simulate(request: Request, body: SimulateRequest, service: Service) -> Response:
+@simulate.post("/simulate", responses=ERRORS, openapi_extra=body_doc(SimulateRequest))
+async def post_simulate(request: Request, body: SimulateBody, service: Service) -> Response:
     """Roll a plan (the result of ``/v1/plan``) in closed loop on a map: simulator, odometry/GNSS fusion
     and the MPC tracker of paper 001. Answers the SIM.json object ``sphereplan simulate`` writes
     (``trajectory``, ``estimate``, ``odometry``, ``gnss``, ``commands``, ``metrics``)."""
@@ -238,8 +312,8 @@ async def post_simulate(request: Request, body: SimulateRequest, service: Servic
 reconfigure = APIRouter(prefix="/v1", tags=["reconfigure"])
 
 
-@reconfigure.post("/reconfigure", responses=ERRORS)
-async def post_reconfigure(request: Request, body: ReconfigureIn, service: Service) -> Response:
+@reconfigure.post("/reconfigure", responses=ERRORS, openapi_extra=body_doc(ReconfigureIn))
+async def post_reconfigure(request: Request, body: ReconfigureBody, service: Service) -> Response:
     """Spherobot reconfiguration (paper 004): reach ``goal`` with the camera point P on top (and, with
     ``goal_heading``, a heading), proved by rolling the sphere through SO(3). What ``sphereplan
     reconfigure`` prints; with ``map`` the swept sphere is checked against it (failures 203–206, 208)."""
@@ -249,15 +323,15 @@ async def post_reconfigure(request: Request, body: ReconfigureIn, service: Servi
 vpip = APIRouter(prefix="/v1/vpip", tags=["vpip"])
 
 
-@vpip.post("/rods", responses=ERRORS)
-async def post_vpip_rods(request: Request, body: VpipRodsRequest, service: Service) -> Response:
+@vpip.post("/rods", responses=ERRORS, openapi_extra=body_doc(VpipRodsRequest))
+async def post_vpip_rods(request: Request, body: VpipRodsBody, service: Service) -> Response:
     """Eq. 18 length of every rod of a rod-driven sphere (paper 000) for one VPIP plane, roll and pitch
     phase: what ``sphereplan vpip rods`` prints."""
     return await answer(request, service, service.submit_vpip_rods, body)
 
 
-@vpip.post("/schedule", responses=ERRORS)
-async def post_vpip_schedule(request: Request, body: VpipScheduleRequest, service: Service) -> Response:
+@vpip.post("/schedule", responses=ERRORS, openapi_extra=body_doc(VpipScheduleRequest))
+async def post_vpip_schedule(request: Request, body: VpipScheduleBody, service: Service) -> Response:
     """The 100 Hz VPIP cascade along a plan: plane angles and rod lengths per tick, the series
     ``sphereplan vpip schedule --out`` writes."""
     return await answer(request, service, service.submit_vpip_schedule, body)
@@ -266,8 +340,8 @@ async def post_vpip_schedule(request: Request, body: VpipScheduleRequest, servic
 tensegrity = APIRouter(prefix="/v1/tensegrity", tags=["tensegrity"])
 
 
-@tensegrity.post("/static", responses=ERRORS)
-async def post_tensegrity_static(request: Request, body: TensegrityStaticRequest, service: Service) -> Response:
+@tensegrity.post("/static", responses=ERRORS, openapi_extra=body_doc(TensegrityStaticRequest))
+async def post_tensegrity_static(request: Request, body: TensegrityStaticBody, service: Service) -> Response:
     """The four hybrid static states of the TeXploR two-arc robot (paper 002) for slider angles θ1, θ2:
     what ``sphereplan tensegrity static`` prints."""
     return await answer(request, service, service.submit_tensegrity_static, body)
@@ -279,7 +353,7 @@ maps = APIRouter(prefix="/v1", tags=["maps"])
 @maps.get("/maps", response_model=list[MapInfo])
 async def get_maps(service: Service) -> list[dict[str, Any]]:
     """The maps in the maps folder (the names ``map`` may take)."""
-    return service.maps()
+    return await asyncio.to_thread(service.maps)
 
 
 @maps.get("/maps/{name}.png", response_class=Response, responses={200: {"content": {"image/png": {}}}, **ERRORS})
@@ -347,6 +421,10 @@ def install_error_handlers(app: FastAPI) -> None:
                                                             ("body",)) for e in errors)
         return _error(400 if malformed else 422, str(error), error.field)
 
+    @app.exception_handler(BodyRefused)
+    async def body_refused(request: Request, exc: BodyRefused) -> JSONResponse:
+        return _error(exc.status, exc.msg, exc.field)
+
     @app.exception_handler(StarletteHTTPException)
     async def http_error(request: Request, exc: StarletteHTTPException) -> JSONResponse:
         return _error(exc.status_code, str(exc.detail), headers=getattr(exc, "headers", None))
@@ -384,6 +462,7 @@ def create_app(settings: ServiceSettings | None = None, service: PlanningService
             if node is not None:
                 await asyncio.to_thread(node.close)
             await asyncio.to_thread(svc.close)
+            app.state.parse_gate.close()
 
     app = FastAPI(
         title="sphereplan",
@@ -395,6 +474,7 @@ def create_app(settings: ServiceSettings | None = None, service: PlanningService
         redirect_slashes=False,  # /v1/plan/ is an unknown route (404), not a redirect built from the Host header
     )
     app.state.service = svc
+    app.state.parse_gate = ParseGate(retry_after_s=settings.retry_after_s)
     app.include_router(health)
     app.include_router(plan)
     app.include_router(simulate)
@@ -405,6 +485,7 @@ def create_app(settings: ServiceSettings | None = None, service: PlanningService
     app.include_router(robots)
     app.include_router(viewer)
     install_error_handlers(app)
+    app.openapi = _openapi_with_bodies(app)  # type: ignore[method-assign]
     app.add_middleware(BodyLimit, limit=settings.max_body_bytes)
     if settings.http_token is not None:
         app.add_middleware(BearerToken, token=settings.http_token)  # outermost: checked before the body is read

@@ -21,6 +21,10 @@ from planner.spherobot.rolling import Quat, quat_from_tilt
 
 METHODS = ("arc", "triangle")
 ROBOT = "spherobot"
+#: largest sphere a request may roll (m): a rolled result is sampled per radius, so absurd radii break the numbers
+MAX_RADIUS_M = 100.0
+#: farthest goal, in sphere radii from the start (paper 004's examples are a few radii; samples grow with it)
+MAX_RADII = 200
 
 
 @dataclass(frozen=True)
@@ -116,6 +120,12 @@ class ReconfigureRequest:
             v = getattr(self, name)
             if not (math.isfinite(v) and v > 0):
                 raise InvalidInput(name, f"must be a finite number > 0, got {v!r}")
+        if self.radius_m > MAX_RADIUS_M:
+            raise InvalidInput("radius_m", f"must be at most {MAX_RADIUS_M:g} m, got {self.radius_m:g}")
+        distance = math.dist(self.start, self.goal)
+        if distance > MAX_RADII * self.radius_m:
+            raise InvalidInput("goal", f"is {distance:.3g} m from the start; a reconfiguration rolls at most "
+                                       f"{MAX_RADII} sphere radii ({MAX_RADII * self.radius_m:.3g} m)")
 
     @property
     def start_quat(self) -> Quat:
