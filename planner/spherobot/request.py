@@ -120,12 +120,13 @@ class ReconfigureRequest:
             v = getattr(self, name)
             if not (math.isfinite(v) and v > 0):
                 raise InvalidInput(name, f"must be a finite number > 0, got {v!r}")
-        if self.radius_m > MAX_RADIUS_M:
-            raise InvalidInput("radius_m", f"must be at most {MAX_RADIUS_M:g} m, got {self.radius_m:g}")
+        radius = float(self.radius_m or 0.0)  # filled and checked > 0 above
+        if radius > MAX_RADIUS_M:
+            raise InvalidInput("radius_m", f"must be at most {MAX_RADIUS_M:g} m, got {radius:g}")
         distance = math.dist(self.start, self.goal)
-        if distance > MAX_RADII * self.radius_m:
+        if distance > MAX_RADII * radius:
             raise InvalidInput("goal", f"is {distance:.3g} m from the start; a reconfiguration rolls at most "
-                                       f"{MAX_RADII} sphere radii ({MAX_RADII * self.radius_m:.3g} m)")
+                                       f"{MAX_RADII} sphere radii ({MAX_RADII * radius:.3g} m)")
 
     @property
     def start_quat(self) -> Quat:
