@@ -66,6 +66,9 @@ log = logging.getLogger(__name__)
 #: added to a plan's time limit for the pool's hard deadline: loading the map (a mesh's first load) is not
 #: part of the time limit, the search, smoothing and result building are (the job checks those itself)
 MAP_LOAD_ALLOWANCE_S = 10.0
+#: how long past its own wall-clock termination a job may run before the pool kills its worker (s): the loops
+#: check their clock every few steps, so only a job stuck where it cannot look at it meets this
+JOB_STOP_ALLOWANCE_S = 5.0
 #: widest inline grid a plan may use (m, diagonal): cells × resolution, so a few cells cannot span a continent
 MAX_INLINE_EXTENT_M = 2_000.0
 
@@ -307,15 +310,24 @@ class PlanningService:
         robot = self._plan_robot(request.robot, request.path, DEFAULT_ROBOT)
         options = SimulationOptions(control_rate_hz=request.rate_hz, tracker=request.tracker,
                                     mpc=MPCParams(horizon=request.horizon), time_limit_s=request.time_limit_s)
+        termination, deadline = self._job_termination()
         return self._submit(simulate_job, request.path.model_dump(mode="json"), self._map_source(request.map), robot,
-                            request.seed, request.noise, options)
+                            request.seed, request.noise, options, termination, deadline_s=deadline)
+
+    def _job_termination(self) -> tuple[Termination, float]:
+        """The wall-clock termination of a job without a time limit of its own (``max_job_s``; the job stops
+        itself at it) and the pool's deadline, ``JOB_STOP_ALLOWANCE_S`` later (only a job that cannot stop is
+        killed there)."""
+        return Termination(self.settings.max_job_s), self.settings.max_job_s + JOB_STOP_ALLOWANCE_S
 
     def submit_reconfigure(self, request: ReconfigureIn) -> Future[Outcome]:
         """Queue a Spherobot reconfiguration (optionally checked against a map). The request itself bounds the
         radius and the goal's distance (``planner.spherobot.request.MAX_RADII`` sphere radii from the start: the
         rolled result is sampled along the way, so its size and cost grow with distance / radius)."""
         problem = ReconfigureRequest.from_dict(request.model_dump(exclude={"map"}))
-        return self._submit(reconfigure_job, problem, None if request.map is None else self._map_source(request.map))
+        termination, deadline = self._job_termination()
+        return self._submit(reconfigure_job, problem, None if request.map is None else self._map_source(request.map),
+                            termination, deadline_s=deadline)
 
     def submit_vpip_rods(self, request: VpipRodsRequest) -> Future[Outcome]:
         """Queue one eq. 18 rod-length evaluation."""
@@ -326,7 +338,9 @@ class PlanningService:
     def submit_vpip_schedule(self, request: VpipScheduleRequest) -> Future[Outcome]:
         """Queue a 100 Hz VPIP schedule along ``request.path`` (robot: the request's, the plan's, daedalus)."""
         robot = self._plan_robot(request.robot, request.path, "daedalus")
-        return self._submit(vpip_schedule_job, request.path.model_dump(mode="json"), robot, request.driver)
+        termination, deadline = self._job_termination()
+        return self._submit(vpip_schedule_job, request.path.model_dump(mode="json"), robot, request.driver,
+                            termination, deadline_s=deadline)
 
     def submit_tensegrity_static(self, request: TensegrityStaticRequest) -> Future[Outcome]:
         """Queue the TeXploR static-state computation."""

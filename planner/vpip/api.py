@@ -16,6 +16,7 @@ import numpy as np
 
 from planner.errors import InvalidInput, RobotProfileError
 from planner.robot import RobotProfile, RollModel, load_robot
+from planner.termination import Termination
 from planner.vpip.cascade import rod_params, run_schedule
 from planner.vpip.circle import run_circle
 from planner.vpip.rods import rod_lengths
@@ -310,10 +311,12 @@ def schedule_report(
     robot: str | RobotProfile | None = None,
     driver: str = "vpip",
     plant: str = "surrogate",
+    termination: Termination | None = None,
 ) -> dict[str, Any]:
     """Run the cascade along a planner result (``sphereplan vpip schedule``; the full time series).
 
-    ``robot`` defaults to the plan's own ``robot.name``, then ``daedalus``.
+    ``robot`` defaults to the plan's own ``robot.name``, then ``daedalus``; ``termination`` bounds the wall
+    clock (and may cancel).
     """
     if robot is None:
         embedded = plan.get("robot") if isinstance(plan, Mapping) else None
@@ -323,4 +326,4 @@ def schedule_report(
             else "daedalus"
         )
     profile = robot if isinstance(robot, RobotProfile) else load_robot(robot)
-    return run_schedule(plan, profile, driver=driver, plant=plant)
+    return run_schedule(plan, profile, driver=driver, plant=plant, termination=termination)

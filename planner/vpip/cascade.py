@@ -49,10 +49,14 @@ from planner.errors import InvalidInput, RobotProfileError
 from planner.kinematics import wrap
 from planner.result import state_column
 from planner.robot import RobotProfile
+from planner.termination import Termination
 from planner.vpip.controllers import PitchController, RollController, gains_from_section
 from planner.vpip.mujoco_plant import MujocoPlant, Observation
 from planner.vpip.rods import RodDriver, RodParams, equivalent_plane
 from planner.vpip.simple import SimpleDriver
+
+#: control steps between two looks at the wall clock (termination)
+CHECK_EVERY = 20
 
 DRIVERS = ("vpip", "simple")
 PLANTS = ("surrogate", "mujoco")
@@ -322,8 +326,10 @@ def run_schedule(
     tracking: TrackingGains | None = None,
     max_duration_s: float | None = None,
     plant: str = "surrogate",
+    termination: Termination | None = None,
 ) -> dict[str, Any]:
     """Run the cascade along ``plan`` and return the time series (JSON-ready, SI units, radians).
+    ``termination`` (wall clock, cancel) is checked every ``CHECK_EVERY`` ticks.
 
     ``series`` holds, per tick: t, desired and simulated roll, desired and simulated ω, φ_VPIP,
     θ_VPIP, the pitch phase, the tracked pose (x, y, yaw, s) and ``rod_length_m`` (ticks × 2n commanded
@@ -384,7 +390,10 @@ def run_schedule(
     max_lat = 0.0
     reached = False
     steps = math.ceil(limit_s / dt)
+    clock = termination.start() if termination is not None else None
     for k in range(steps + 1):
+        if clock is not None and k % CHECK_EVERY == 0:
+            clock.check("the VPIP schedule")
         t = k * dt
         t_plan = ref.t[0] + t
         roll, omega, phase = obs.roll_rad, obs.omega_rad_s, obs.phase_rad
