@@ -18,10 +18,10 @@ import threading
 from collections.abc import Sequence
 from types import FrameType
 
+import zenoh
 
-def router_config(listen: str, config_file: str | None) -> object:
-    import zenoh
 
+def router_config(listen: str, config_file: str | None) -> zenoh.Config:
     if config_file is not None:
         conf = zenoh.Config.from_file(config_file)
     else:
@@ -37,8 +37,6 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument("--listen", default="tcp/127.0.0.1:7447", help="listen endpoint (default tcp/127.0.0.1:7447)")
     parser.add_argument("--config", default=None, metavar="FILE", help="a Zenoh JSON5 config (its mode is set to router)")
     args = parser.parse_args(argv)
-    import zenoh
-
     try:
         conf = router_config(args.listen, args.config)
         session = zenoh.open(conf)
