@@ -35,7 +35,8 @@ def router_config(listen: str, config_file: str | None) -> zenoh.Config:
 def main(argv: Sequence[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="python -m service.zenoh_router", description=__doc__.splitlines()[0])
     parser.add_argument("--listen", default="tcp/127.0.0.1:7447", help="listen endpoint (default tcp/127.0.0.1:7447)")
-    parser.add_argument("--config", default=None, metavar="FILE", help="a Zenoh JSON5 config (its mode is set to router)")
+    parser.add_argument("--config", default=None, metavar="FILE",
+                        help="a Zenoh JSON5 config (its mode is set to router)")
     args = parser.parse_args(argv)
     try:
         conf = router_config(args.listen, args.config)
