@@ -2,7 +2,9 @@
 
 ``--suite real`` instead draws seeded random problems on Nav2's maps (``maps/real``) the way Nav2's planner
 benchmark does and compares sphereplan with OMPL BIT* on Dubins and Reeds–Shepp spaces
-(:mod:`lab.planning.real`, docs/planning.md "The real-map benchmark").
+(:mod:`lab.planning.real`, docs/planning.md "The real-map benchmark"). ``--suite load`` runs the service under
+load (:func:`lab.loadtest.fleet_main`: one instance vs two behind HAProxy, health probes under big bodies,
+failover).
 """
 
 from __future__ import annotations
@@ -31,10 +33,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--rrt-time", type=finite_float, default=2.0, help="RRT* budget, s (0 = skip)")
     parser.add_argument("--csv", default=None, help="CSV output (default bench.csv; bench_real.csv for --suite real)")
     parser.add_argument("--png", default=None, help="PNG output (default bench.png; bench_real.png for --suite real)")
-    parser.add_argument("--suite", choices=("planning", "reconfigure", "mpc", "all", "real"), default="planning",
+    parser.add_argument("--suite", choices=("planning", "reconfigure", "mpc", "all", "real", "load"),
+                        default="planning",
                         help="planning: Hybrid A* vs OMPL on the shipped problems (default); reconfigure: Spherobot "
                              "plan times; mpc: MPC step times of the tracker; all: those three; real: random "
-                             "problems on Nav2's maps against BIT* (minutes)")
+                             "problems on Nav2's maps against BIT* (minutes); load: the service under load, one "
+                             "instance vs two behind HAProxy, and failover (needs haproxy; minutes)")
     real = parser.add_argument_group("--suite real")
     real.add_argument("--real-maps", default=None,
                       help="comma-separated map names in maps/real or YAML paths (default: every map in maps/real)")
@@ -46,6 +50,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                       help="JSON object of sphereplan planner options (default: the defaults), e.g. "
                            "'{\"allow_reverse\": true}'")
     real.add_argument("--no-reference", action="store_true", help="skip OMPL BIT* (no solvability reference)")
+    load = parser.add_argument_group("--suite load")
+    load.add_argument("--duration", type=positive_float, default=10.0, help="seconds per row (default 10)")
+    load.add_argument("--workers", type=int, default=1, help="worker processes per instance (default 1)")
     parser.set_defaults(func=run)
 
 
@@ -108,6 +115,12 @@ def run_real(args: argparse.Namespace) -> int:
 def run(args: argparse.Namespace) -> int:
     if args.suite == "real":
         return run_real(args)
+    if args.suite == "load":
+        from lab.loadtest import fleet_main  # starts servers and HAProxy: only when asked
+
+        if not 1 <= args.workers <= 64:
+            raise InvalidInput("--workers", "must be in [1, 64]")
+        return fleet_main(args.duration, args.workers)
     if args.runs < 1:
         raise InvalidInput("--runs", "must be ≥ 1")
     if args.suite in ("reconfigure", "all"):
