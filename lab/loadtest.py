@@ -237,13 +237,29 @@ async def failover_run(url: str, bodies: list[dict[str, Any]], concurrency: int,
             "max_around_kill_ms": 1000 * max(latencies_after, default=float("nan"))}
 
 
+def _probe_healthz(url: str, duration_s: float, out: Any) -> None:
+    """In its own process (as a balancer's health checker is): ``GET /healthz`` every 50 ms; latencies to ``out``."""
+    probes = []
+    t0 = time.perf_counter()
+    with httpx.Client(base_url=url, timeout=60) as client:
+        while time.perf_counter() - t0 < duration_s:
+            start = time.perf_counter()
+            client.get("/healthz")
+            probes.append(time.perf_counter() - start)
+            time.sleep(0.05)
+    out.put(probes)
+
+
 async def probes_under_big_bodies(url: str, clients: int, duration_s: float) -> dict[str, Any]:
     """``clients`` clients keep posting ≈ 3 MB plan bodies (an inline 1000 × 1000 grid, refused after parsing for
-    its cells) while one prober times ``GET /healthz`` every 50 ms."""
+    its cells) while a separate process times ``GET /healthz`` every 50 ms."""
+    import multiprocessing
+
     grid = {"data": [[0] * 1000 for _ in range(1000)], "resolution_m": 0.05}
     body = json.dumps({"map": grid, "start": {"x": 1, "y": 1, "yaw": 0}, "goal": {"x": 2, "y": 1, "yaw": 0}}).encode()
-    probes: list[float] = []
     statuses: dict[int, int] = {}
+    ctx = multiprocessing.get_context("spawn")
+    out = ctx.Queue()
     t0 = time.perf_counter()
     async with httpx.AsyncClient(base_url=url, timeout=180) as client:
 
@@ -252,15 +268,11 @@ async def probes_under_big_bodies(url: str, clients: int, duration_s: float) -> 
                 response = await client.post("/v1/plan", content=body, headers=JSON)
                 statuses[response.status_code] = statuses.get(response.status_code, 0) + 1
 
-        async def prober() -> None:
-            async with httpx.AsyncClient(base_url=url, timeout=60) as own:  # its own connection, as a balancer's
-                while time.perf_counter() - t0 < duration_s:
-                    start = time.perf_counter()
-                    await own.get("/healthz")
-                    probes.append(time.perf_counter() - start)
-                    await asyncio.sleep(0.05)
-
-        await asyncio.gather(prober(), *(sender() for _ in range(clients)))
+        prober = ctx.Process(target=_probe_healthz, args=(url, duration_s, out))
+        prober.start()
+        await asyncio.gather(*(sender() for _ in range(clients)))
+        probes: list[float] = await asyncio.to_thread(out.get, True, 120)
+        prober.join(timeout=60)
     return {"probes": len(probes), "p50_ms": 1000 * _percentile(probes, 50), "p99_ms": 1000 * _percentile(probes, 99),
             "max_ms": 1000 * max(probes, default=float("nan")), "bodies": statuses, "body_mb": len(body) / 1e6}
 

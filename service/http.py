@@ -132,7 +132,7 @@ def json_body(model: type[M]) -> Callable[[Request], Any]:
             if len(raw) <= SMALL_BODY_BYTES:
                 return parse_json_model(model, raw, limit)
             gate: ParseGate = request.app.state.parse_gate
-            return await asyncio.wrap_future(gate.submit(lambda: parse_json_model(model, raw, limit)))
+            return await asyncio.wrap_future(gate.submit(model, raw, limit))
         except MalformedBody as exc:
             raise BodyRefused(400, exc.msg, exc.field) from None
 
@@ -449,12 +449,13 @@ def create_app(settings: ServiceSettings | None = None, service: PlanningService
     @asynccontextmanager
     async def lifespan(app: FastAPI) -> AsyncIterator[None]:
         node = None
+        await asyncio.to_thread(app.state.parse_gate.warm)
         await asyncio.to_thread(svc.start)
         try:
             if settings.zenoh:
                 from service.zenoh_node import ZenohNode
 
-                node = ZenohNode(svc, settings)
+                node = ZenohNode(svc, settings, parse_gate=app.state.parse_gate)
                 await asyncio.to_thread(node.start)
             log.info("sphereplan service ready (%d workers, warm-up %.1f s)", settings.workers, svc.warm_up_s)
             yield

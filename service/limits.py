@@ -2,10 +2,11 @@
 
 A body is refused by its length before it is read further (``max_body_bytes``). A small one (at most
 ``SMALL_BODY_BYTES``) is parsed where it arrives: it costs less than a health probe. A large one (an inline
-map of a few MB becomes hundreds of MB of Python lists while it is parsed) is parsed off the event loop or the
-Zenoh callback thread, at most ``PARSE_CONCURRENCY`` at a time, and at most ``MAX_PENDING_PARSES`` wait for
-their turn; beyond that the request is answered busy (503 / ``reply_err``) instead of queued. So a burst of
-large bodies bounds the memory it can take and never holds a health probe or a small query behind it.
+map of a few MB becomes hundreds of MB of Python lists while it is parsed) is parsed in a separate process,
+off the event loop and the Zenoh callback threads and off the GIL they need, at most ``PARSE_CONCURRENCY``
+at a time; at most ``MAX_PENDING_PARSES`` are admitted, beyond that the request is answered busy (503 /
+``reply_err``) instead of queued. So a burst of large bodies bounds the memory it can take and never holds
+a health probe or a small query behind it.
 
 :class:`KeyedSerialExecutor` runs the Zenoh topics' work off the callback thread in order per robot (a pose
 published just before a goal is applied first) while different robots go in parallel.
@@ -17,7 +18,7 @@ import json
 import threading
 from collections import deque
 from collections.abc import Callable
-from concurrent.futures import ThreadPoolExecutor
+from concurrent.futures import Future, ThreadPoolExecutor
 from typing import Any, TypeVar
 
 from pydantic import BaseModel, ValidationError
@@ -64,38 +65,71 @@ def parse_json_model(model: type[M], raw: bytes, limit: int) -> M:
         raise InvalidInput("body", "nested too deeply") from None
 
 
+def _parse_in_child(model: type[M], raw: bytes, limit: int) -> tuple[str, Any, str, str]:
+    """:func:`parse_json_model` in a parse process: ("ok", model, "", "") or ("malformed" | "invalid", None,
+    field, message) (exceptions with their own constructors are not sent across processes)."""
+    try:
+        return "ok", parse_json_model(model, raw, limit), "", ""
+    except MalformedBody as exc:
+        return "malformed", None, exc.field, exc.msg
+    except InvalidInput as exc:
+        return "invalid", None, exc.field, exc.msg
+
+
+def _ready() -> bool:
+    return True
+
+
 class ParseGate:
-    """At most ``PARSE_CONCURRENCY`` large parses at once in a small thread pool, at most
-    ``MAX_PENDING_PARSES`` admitted (running or waiting); :meth:`admit` raises :class:`ServiceBusy` beyond."""
+    """Large bodies parsed in ``PARSE_CONCURRENCY`` separate processes (spawned): JSON decoding and pydantic
+    validation hold the GIL for the whole call (≈ 0.5 s for a 3 MB grid on a busy machine), so a thread would
+    still stop the event loop and the Zenoh callbacks. At most ``MAX_PENDING_PARSES`` are admitted (running or
+    waiting); :meth:`submit` raises :class:`ServiceBusy` beyond."""
 
     def __init__(self, concurrency: int = PARSE_CONCURRENCY, pending: int = MAX_PENDING_PARSES,
                  retry_after_s: int = 1) -> None:
-        self.executor = ThreadPoolExecutor(concurrency, thread_name_prefix="sphereplan-parse")
+        import multiprocessing
+        from concurrent.futures import ProcessPoolExecutor
+
+        self._executor = ProcessPoolExecutor(concurrency, mp_context=multiprocessing.get_context("spawn"))
         self._slots = threading.BoundedSemaphore(pending)
         self._pending = pending
         self._retry_after_s = retry_after_s
 
-    def admit(self) -> None:
-        """Take a pending slot or raise :class:`ServiceBusy`; give it back with :meth:`release`."""
+    def warm(self) -> None:
+        """Start the parse processes now (blocking), so the first large body does not wait for them."""
+        self._executor.submit(_ready).result(timeout=300)
+
+    def submit(self, model: type[M], raw: bytes, limit: int) -> Future[M]:
+        """Parse ``raw`` as ``model`` in a parse process: a future of the model, or of the :class:`InvalidInput`
+        (:class:`MalformedBody`) it amounts to. Raises :class:`ServiceBusy` when too many are admitted."""
         if not self._slots.acquire(blocking=False):
             raise ServiceBusy(self._pending, self._retry_after_s)
-
-    def release(self) -> None:
-        self._slots.release()
-
-    def submit(self, fn: Callable[[], Any]) -> Any:
-        """Admit and run ``fn`` in the parse pool (the slot is released when it ends); a future."""
-        self.admit()
         try:
-            future = self.executor.submit(fn)
-        except RuntimeError:
-            self.release()
+            inner = self._executor.submit(_parse_in_child, model, raw, limit)
+        except RuntimeError:  # shut down
+            self._slots.release()
             raise ServiceBusy(self._pending, self._retry_after_s) from None
-        future.add_done_callback(lambda _: self.release())
-        return future
+        outer: Future[M] = Future()
+
+        def done(job: Future[tuple[str, Any, str, str]]) -> None:
+            self._slots.release()
+            try:
+                kind, value, field, msg = job.result()
+            except BaseException as exc:  # the parse process died (its memory), or the pool shut down
+                outer.set_exception(ServiceBusy(self._pending, self._retry_after_s) if not
+                                    isinstance(exc, InvalidInput) else exc)
+                return
+            if kind == "ok":
+                outer.set_result(value)
+            else:
+                outer.set_exception(MalformedBody(msg) if kind == "malformed" else InvalidInput(field, msg))
+
+        inner.add_done_callback(done)
+        return outer
 
     def close(self) -> None:
-        self.executor.shutdown(wait=False, cancel_futures=True)
+        self._executor.shutdown(wait=False, cancel_futures=True)
 
 
 class KeyedSerialExecutor:

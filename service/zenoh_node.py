@@ -114,7 +114,7 @@ class ZenohNode:
     undeclares and closes it."""
 
     def __init__(self, service: PlanningService, settings: ServiceSettings | None = None,
-                 config: zenoh.Config | None = None) -> None:
+                 config: zenoh.Config | None = None, parse_gate: ParseGate | None = None) -> None:
         self.service = service
         self.settings = settings or service.settings
         self._config = config
@@ -126,7 +126,9 @@ class ZenohNode:
         self.ros2: Any = None  # the rmw_zenoh face (service.ros2_zenoh), with settings.ros2
         self._plans: dict[str, Future[Outcome]] = {}  # robot → the plan in flight for its newest goal
         self._token = self.settings.http_token
-        self._parse = ParseGate(retry_after_s=self.settings.retry_after_s)  # large query payloads, off the callback
+        # large payloads are parsed in separate processes (the HTTP app's, when it runs the node)
+        self._own_gate = parse_gate is None
+        self._parse = parse_gate or ParseGate(retry_after_s=self.settings.retry_after_s)
         self._topics = KeyedSerialExecutor()  # robot samples: off the callback, in order per robot
         # one entry per queryable capability: key suffix → (request model, submit)
         self.queryables: dict[str, tuple[type[BaseModel], Callable[[Any], Future[Outcome]]]] = {
@@ -169,7 +171,8 @@ class ZenohNode:
             self.ros2.close()
         undeclare_all(self._entities)
         session.close()
-        self._parse.close()
+        if self._own_gate:
+            self._parse.close()
         self._topics.close()
 
     # ------------------------------------------------------------------------------ queries
@@ -178,9 +181,9 @@ class ZenohNode:
                        submit: Callable[[Any], Future[Outcome]]) -> Callable[[zenoh.Query], None]:
         limit = self.settings.max_body_bytes
 
-        def handle(query: zenoh.Query, raw: bytes) -> None:
+        def handle(query: zenoh.Query, parse: Callable[[], Any]) -> None:
             try:
-                future = submit(parse_json_model(model, raw, limit))
+                future = submit(parse())
             except Exception as exc:
                 self._answer(query, key, refusal(exc, f"query on {key}"))
                 return
@@ -195,9 +198,10 @@ class ZenohNode:
                 assert query.payload is not None
                 raw = query.payload.to_bytes()
                 if size <= SMALL_BODY_BYTES:
-                    handle(query, raw)
-                else:  # a large payload is parsed in the parse pool: it holds no other query or sample
-                    self._parse.submit(lambda: handle(query, raw))
+                    handle(query, lambda: parse_json_model(model, raw, limit))
+                else:  # a large payload is parsed in a parse process: it holds no other query or sample
+                    parsed = self._parse.submit(model, raw, limit)
+                    parsed.add_done_callback(lambda done: handle(query, done.result))
             except Exception as exc:
                 self._answer(query, key, refusal(exc, f"query on {key}"))
 
