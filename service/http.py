@@ -16,10 +16,12 @@ service is answered as the outcome table says (:mod:`service.outcome`); the HTTP
 422    wrong types, unknown fields, NaN/inf, negative or too long time limits, bad options;
        a plan that failed (start/goal outside or occupied 203–206, timeout 207, no path 208):
        the body is then the failed-result JSON (``status: failed``) the CLI prints
-503    the pool is full (``Retry-After`` header), the service is not ready, or it is shutting down
+503    the pool is full (``Retry-After`` header), too many large bodies waiting to be parsed, the service is
+       not ready or shutting down, or the worker under the job died or hung (``Retry-After``)
 =====  ==================================================================================
 
-Nothing a client sends produces a 5xx; a 500 means a bug and is logged with its traceback.
+Nothing a client sends produces a 5xx; a server fault is a 503, a 500 means a bug and is logged with its
+traceback. Bodies are read by :func:`json_body`: a large one is parsed in a parse process (:mod:`service.limits`).
 """
 
 from __future__ import annotations

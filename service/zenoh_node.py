@@ -3,7 +3,8 @@
 Key expressions (payloads are the same JSON as the HTTP API, encoding ``application/json``):
 
 * queryable ``sphereplan/plan`` — payload a :class:`~service.wire.PlanRequest`; replies the plan result
-  with ``reply``, or the error / failed-result JSON with ``reply_err``. Queries go to the process pool:
+  with ``reply``, or the error / failed-result JSON with ``reply_err``. Queryables are declared complete,
+  so a query with the default target reaches one instance however many serve. Queries go to the process pool:
   the callback only validates and submits, the reply is sent when the job finishes, so a slow plan
   never blocks other queries. Every query is finalised (``drop``) once answered.
 * queryables ``sphereplan/reconfigure`` and ``sphereplan/simulate`` — payloads a
@@ -19,7 +20,13 @@ Key expressions (payloads are the same JSON as the HTTP API, encoding ``applicat
   superseded goal publishes ``superseded`` and no path.
 * Every payload is bounded like an HTTP body (``max_body_bytes``, checked by length before it is read)
   and a malformed or too deeply nested one is answered with the error JSON naming ``body`` (a query's
-  ``reply_err``; on the topics an ``invalid_pose`` / ``invalid_goal`` status).
+  ``reply_err``; on the topics an ``invalid_pose`` / ``invalid_goal`` status). A large one is parsed in a
+  parse process (:mod:`service.limits`), robot samples are handled off the callback thread in order per
+  robot, so one slow payload holds no other.
+* With a token (``--token-file``, :mod:`service.auth`) every query and pose/goal put must carry the
+  attachment ``Bearer <token>``: a query without it is answered ``reply_err`` naming ``attachment``, a sample
+  without it is dropped. ``settings.zenoh_robots`` (``--robots``) says which robots' topics this instance
+  plans, so that instances serving one fleet each plan a disjoint set.
 * a liveliness token ``sphereplan/planner/<zid>`` announces the planner while it runs.
 
 Default session: peer mode, listening on ``tcp/127.0.0.1:7447`` only, multicast scouting off, so the
