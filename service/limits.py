@@ -15,6 +15,7 @@ published just before a goal is applied first) while different robots go in para
 from __future__ import annotations
 
 import json
+import logging
 import threading
 from collections import deque
 from collections.abc import Callable
@@ -28,6 +29,7 @@ from service.outcome import ServiceBusy
 from service.wire import invalid_input
 
 M = TypeVar("M", bound=BaseModel)
+log = logging.getLogger(__name__)
 
 #: bodies up to this size are parsed where they arrive (B)
 SMALL_BODY_BYTES = 64 * 1024
@@ -171,7 +173,10 @@ class KeyedSerialExecutor:
                     return
                 fn = queue.popleft()
                 self._pending -= 1
-            fn()  # the callable handles its own errors
+            try:
+                fn()
+            except Exception:  # a bug in the callable: logged, and this key's queue keeps draining
+                log.exception("handling a message for %s failed", key)
 
     def close(self) -> None:
         self._pool.shutdown(wait=False, cancel_futures=True)
