@@ -270,3 +270,32 @@ def test_long_jobs_other_than_plans_stop_at_their_own_deadline() -> None:
     cancelled = Termination(60.0, cancel=lambda: True)
     with pytest.raises(PlannerCancelled):
         simulate_plan(grid, plan, termination=cancelled)
+
+
+def test_robot_samples_keep_their_order_per_robot_and_one_robot_does_not_hold_another() -> None:
+    """The Zenoh topics' work runs off the callback thread (finding 3): in order per robot, robots in parallel."""
+    import threading
+
+    from service.limits import KeyedSerialExecutor
+
+    executor = KeyedSerialExecutor(workers=2)
+    release = threading.Event()
+    seen: list[tuple[str, int]] = []
+    lock = threading.Lock()
+
+    def record(key: str, i: int) -> None:
+        with lock:
+            seen.append((key, i))
+
+    try:
+        assert executor.submit("slow", release.wait)  # robot "slow" is busy with a large goal
+        for i in range(20):
+            assert executor.submit("fast", lambda i=i: record("fast", i))
+        assert executor.submit("slow", lambda: record("slow", 0))
+        poll(lambda: len(seen) == 20, what="robot 'fast' to go on while 'slow' is busy")
+        assert seen == [("fast", i) for i in range(20)]
+        release.set()
+        poll(lambda: ("slow", 0) in seen, what="robot 'slow' to go on")
+    finally:
+        release.set()
+        executor.close()
