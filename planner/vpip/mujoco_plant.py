@@ -127,6 +127,7 @@ class MujocoPlant:
         self._phase = 0.0
         self._last_wrapped_phase = 0.0
         self._ctrl = np.zeros(n)
+        self.peak_rod_speed_m_s = 0.0
         if settle_s > 0:
             self._advance(np.zeros(n), settle_s)
         self.time_offset_s = float(self.data.time)
@@ -216,12 +217,25 @@ class MujocoPlant:
 
     # ------------------------------------------------------------- stepping
     def _advance(self, target: np.ndarray, duration_s: float) -> None:
+        """Move every rod's reference linearly to ``target`` over ``duration_s`` and step MuJoCo.
+
+        Each physics step the rod servos get the velocity ``ref_rate + (ref − q) / rod_servo_tracking_s``
+        clipped to ``±rod_speed_m_s`` (the actuators' control range): a rod follows its reference and
+        makes up any lag, but never faster than Table 1's extension speed.
+        """
         mujoco = self._mj
         steps = max(1, round(duration_s / self.model.opt.timestep))
         start = self._ctrl.copy()
+        rate = (target - start) / (steps * self.model.opt.timestep)
+        vmax = self.params.rod_speed_m_s
+        gain = 1.0 / self.body.rod_servo_tracking_s
         for i in range(1, steps + 1):
-            self.data.ctrl[:] = start + (target - start) * (i / steps)
+            ref = start + (target - start) * (i / steps)
+            q = self.data.qpos[self._rod_qpos]
+            self.data.ctrl[:] = np.clip(rate + gain * (ref - q), -vmax, vmax)
             mujoco.mj_step(self.model, self.data)
+            speed = float(np.max(np.abs(self.data.qvel[self._rod_qvel])))
+            self.peak_rod_speed_m_s = max(self.peak_rod_speed_m_s, speed)
         self._ctrl = target.copy()
 
     def step(self, rod_lengths_m: np.ndarray, dt_s: float) -> None:
@@ -230,6 +244,5 @@ class MujocoPlant:
         if target.shape != (self.params.n_rods,):
             raise InvalidInput("rod_lengths_m", f"needs shape ({self.params.n_rods},), got {target.shape}")
         self._advance(target, dt_s)
-        self.peak_rod_speed_m_s = max(self.peak_rod_speed_m_s, float(np.max(np.abs(self.rod_speeds_m_s()))))
         if not np.all(np.isfinite(self.data.qpos)):
             raise FloatingPointError("MuJoCo state became non-finite")
