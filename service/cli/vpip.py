@@ -9,6 +9,7 @@ from pathlib import Path
 from typing import Any
 
 from planner.errors import InvalidInput
+from planner.vpip.choices import CONTACTS, DRIVERS, GAIN_SETS, PLANTS
 from service.cli._io import (
     Stages,
     add_degrees_flag,
@@ -19,7 +20,6 @@ from service.cli._io import (
     positive_float,
     read_json_file,
 )
-from planner.vpip.choices import CONTACTS, DRIVERS, GAIN_SETS, PLANTS
 from service.outcome import EXIT_NO_SOLUTION
 
 VERB = "vpip"

@@ -119,8 +119,8 @@ def test_no_rod_servo_can_be_asked_to_move_faster_than_the_rod_speed() -> None:
 
 
 def test_the_turn_is_the_tilt_of_a_rolling_sphere_not_spin(short_circles: dict[int, dict]) -> None:
-    """docs/vpip.md "Why the circles are wider": heading rate = spin Ω_z + ω_h·tan(roll), and on the MuJoCo
-    plant the spin is small, so the circle is set by the roll held (≈ 2r/tan(roll), never much tighter)."""
+    """docs/vpip.md "The turn explained": heading rate = spin Ω_z + ω_h·tan(roll), and on the regolith contact
+    the spin is small, so the circle is set by the roll held (≈ 2r/tan(roll), never much tighter)."""
     for r, s in short_circles.items():
         # the split is kinematics of the simulated body: it must add up to the measured heading rate
         assert s["mean_yaw_rate_rad_s"] == pytest.approx(
