@@ -3,8 +3,10 @@
 Paper 000 closes its controllers (Fig. 5) on the robot's measured roll φ_r and rotational speed ω and
 drives the 16 rods with the eq. 18 lengths; §5 runs this on a Gazebo model. :class:`MujocoPlant` is that
 loop's plant here: it takes the 16 commanded rod lengths every control tick (100 Hz, Table 1), moves each
-rod's servo reference linearly across the tick (a rod moves at most ``rod_speed_m_s``, the driver has
-already rate-limited the command) and steps MuJoCo; :meth:`MujocoPlant.observe` reads what an IMU and
+rod's reference linearly across the tick and, every physics step, asks the rod's velocity servo for the
+reference's rate plus a correction of any lag, clipped to ``±rod_speed_m_s`` (so the plant itself never
+drives a rod faster than Table 1's 0.1 m/s; the driver has already rate-limited the lengths), and steps
+MuJoCo; :meth:`MujocoPlant.observe` reads what an IMU and
 odometry would give: roll, rolling rate ω, pitch phase (how far the sphere has rolled, which sets every
 rod's ζ) and the planar pose.
 
