@@ -33,6 +33,7 @@ import numpy as np
 from planner import load_map, plan_path
 from planner.maps.problems import load_problem_set
 from planner.robot import RobotProfile, load_robot, profile_from_dict
+from planner.termination import Termination
 from planner.vpip.api import calibrate_from_circles, profile_toml
 from planner.vpip.cascade import run_schedule
 from planner.vpip.choices import CONTACTS
@@ -173,7 +174,7 @@ def _cave(profile: RobotProfile, problem_name: str, contact: str) -> tuple[dict[
     problems = {p.name: p for p in load_problem_set("maps/problems/cave.json")}
     prob = problems[problem_name]
     grid = load_map(prob.map_path)
-    plan = plan_path(grid, profile, prob.start, prob.goal, time_limit_s=60.0).to_json()
+    plan = plan_path(grid, profile, prob.start, prob.goal, termination=Termination(60.0)).to_json()
     duration = float(plan["states"][-1]["t"])
     result = run_schedule(plan, profile, plant="mujoco", max_duration_s=3.0 * duration + 20.0, contact=contact)
     return plan, result

@@ -31,8 +31,9 @@ from planner.hybrid_astar.search import PlannerOptions
 from planner.maps.catalogue import default_maps_dir, list_maps, map_files
 from planner.maps.nav2 import MESH_SUFFIXES
 from planner.occupancy import OccupancyGrid
-from planner.robot import DEFAULT_ROBOT, builtin_robots, load_robot
+from planner.robot import DEFAULT_ROBOT, RobotProfile, builtin_robots, load_robot
 from planner.spherobot.request import ReconfigureRequest
+from planner.termination import Termination
 from service.grids import grid_png, load_map_file
 from service.jobs import (
     plan_job,
@@ -64,8 +65,6 @@ log = logging.getLogger(__name__)
 
 #: farthest reconfiguration goal, in sphere radii from the start (paper 004's examples are a few radii)
 MAX_RECONFIGURE_RADII = 200
-#: most search expansions a plan may ask for (options.max_iterations): ~64 bytes of node storage each
-MAX_ITERATIONS = 4_000_000
 #: added to a plan's time limit for the pool's hard deadline: loading the map (a mesh's first load) is not
 #: part of the time limit, the search, smoothing and result building are (the job checks those itself)
 MAP_LOAD_ALLOWANCE_S = 10.0
@@ -231,6 +230,11 @@ class PlanningService:
             raise NotFound("map", f"no map named {name!r} in the maps folder (available: {shown})")
         return path
 
+    def robot_profile(self, name: str | None) -> RobotProfile:
+        """The built-in profile ``name`` (None: the default), loaded once per request and handed down as is."""
+        self.resolve_robot(name)
+        return load_robot(name)
+
     def resolve_robot(self, name: str | None) -> None:
         """Raise :class:`NotFound` unless ``name`` is None or a built-in profile (no file paths)."""
         if name is not None and name not in builtin_robots():
@@ -241,27 +245,22 @@ class PlanningService:
 
         Raises :class:`NotFound`/:class:`InvalidInput` for a bad request and :class:`ServiceBusy`.
         """
-        self.resolve_robot(request.robot)
-        options = request.options or {}
-        query = PlanQuery(request.start.as_pose(), request.goal.as_pose(), PlannerOptions.from_dict(options),
-                          request.time_limit_s)
+        robot = self.robot_profile(request.robot)
         limit = self.settings.max_time_limit_s
-        if query.time_limit_s is not None and query.time_limit_s > limit:
+        if request.time_limit_s is not None and request.time_limit_s > limit:
             raise InvalidInput("time_limit_s", f"must be ≤ {limit:g} s on this server")
-        if "time_limit_s" in options and query.options.time_limit_s > limit:
-            raise InvalidInput("options.time_limit_s", f"must be ≤ {limit:g} s on this server")
+        termination = Termination() if request.time_limit_s is None else Termination(request.time_limit_s)
+        query = PlanQuery(request.start.as_pose(), request.goal.as_pose(),
+                          PlannerOptions.from_dict(request.options or {}), termination)
         source = self._map_source(request.map)
         self._check_plan_size(query, source)
-        return self._submit(plan_job, query, request.robot, source,
-                            deadline_s=query.effective_time_limit_s + MAP_LOAD_ALLOWANCE_S)
+        return self._submit(plan_job, query, robot, source,
+                            deadline_s=termination.time_limit_s + MAP_LOAD_ALLOWANCE_S)
 
     def _check_plan_size(self, query: PlanQuery, source: Path | InlineGrid) -> None:
-        """What a plan request may make a worker hold, bounded before a job is queued: the expansions
-        (``options.max_iterations``, the search's node storage), the states of the result (start–goal
-        distance / ``options.state_spacing_m``; the worker checks again with the map's size) and, for an
+        """What a plan request may make a worker hold, bounded before a job is queued: the states of the result
+        (start–goal distance / ``options.state_spacing_m``; the worker checks again with the map's size) and, for an
         inline grid, its extent (cells × resolution) and that start and goal are no farther apart than it."""
-        if query.options.max_iterations > MAX_ITERATIONS:
-            raise InvalidInput("options.max_iterations", f"must be ≤ {MAX_ITERATIONS} on this server")
         distance = math.dist(query.start[:2], query.goal[:2])
         if isinstance(source, InlineGrid):
             rows, cols = len(source.data), len(source.data[0])

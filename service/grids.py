@@ -77,13 +77,15 @@ def read_map(path: Path | str, robot: RobotProfile | None, field: str = "map",
     raise MapError(field, hide(str(error))) from None
 
 
-def load_map_file(path: Path, robot_name: str | None) -> OccupancyGrid:
-    """A map file of the maps folder as a grid, cached per (file, modification time[, robot for meshes]);
-    errors never show the server's paths."""
+def load_map_file(path: Path, robot: RobotProfile | None) -> OccupancyGrid:
+    """A map file of the maps folder as a grid, cached per (file, modification time[, robot for meshes]: a mesh
+    is sliced over the robot's height band; None = the default robot); errors never show the server's paths."""
     stat = path.stat()
     mesh = path.suffix.lower() in MESH_SUFFIXES
-    key = ("file", str(path), stat.st_mtime_ns, stat.st_size, robot_name if mesh else None)
-    return _cached(key, lambda: read_map(path, load_robot(robot_name) if mesh else None, hide_paths=True))
+    if mesh and robot is None:
+        robot = load_robot(None)
+    key = ("file", str(path), stat.st_mtime_ns, stat.st_size, robot if mesh else None)
+    return _cached(key, lambda: read_map(path, robot if mesh else None, hide_paths=True))
 
 
 def inline_grid(spec: InlineGrid) -> OccupancyGrid:
@@ -97,9 +99,9 @@ def inline_grid(spec: InlineGrid) -> OccupancyGrid:
                                               origin=origin, name=spec.name))
 
 
-def load_grid(source: Path | InlineGrid, robot_name: str | None) -> OccupancyGrid:
+def load_grid(source: Path | InlineGrid, robot: RobotProfile | None) -> OccupancyGrid:
     """The grid of a request: a map file of the maps folder (:func:`load_map_file`) or an inline grid."""
-    return load_map_file(source, robot_name) if isinstance(source, Path) else inline_grid(source)
+    return load_map_file(source, robot) if isinstance(source, Path) else inline_grid(source)
 
 
 def grid_png(grid: OccupancyGrid) -> bytes:

@@ -9,16 +9,17 @@ from __future__ import annotations
 
 import logging
 import os
-import time
 from collections.abc import Callable
+from dataclasses import replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from planner.errors import InvalidInput, PlannerTimedOut, PlanningError, SpherePlanError
+from planner.errors import InvalidInput, PlanningError, SpherePlanError
 from planner.occupancy import OccupancyGrid
-from planner.robot import load_robot
+from planner.robot import RobotProfile, load_robot
+from planner.termination import Termination
 from service.grids import load_grid
 from service.outcome import Outcome, error_outcome, ok_outcome, outcome_of_exception
 from service.pipeline import PlanQuery, execute_plan
@@ -63,7 +64,7 @@ def warm_up_job() -> int:
     grid = OccupancyGrid.from_occupied(occupied, 0.1, name="warm-up")
     robot = load_robot(None)
     try:
-        plan_path(grid, robot, (1.5, 1.0, 0.0), (6.5, 1.0, 0.0), time_limit_s=MAX_TIME_LIMIT_S)
+        plan_path(grid, robot, (1.5, 1.0, 0.0), (6.5, 1.0, 0.0), termination=Termination(MAX_TIME_LIMIT_S))
     except PlanningError as exc:  # still warm: the compiled code ran
         log.warning("warm-up plan failed: %s", exc)
     return os.getpid()
@@ -97,23 +98,16 @@ def _job(name: str, compute: Callable[[], Any], plan_robot: Callable[[], Any] | 
         return outcome_of_exception(exc)
 
 
-def plan_job(query: PlanQuery, robot_name: str | None, source: Path | InlineGrid) -> Outcome:
-    """One plan, the pipeline of ``sphereplan plan``: load the robot and the grid, then
-    :func:`service.pipeline.execute_plan`."""
+def plan_job(query: PlanQuery, robot: RobotProfile, source: Path | InlineGrid) -> Outcome:
+    """One plan, the pipeline of ``sphereplan plan``: load the grid, attach this worker's cancel flag to the
+    query's termination, then :func:`service.pipeline.execute_plan`. ``robot`` is the profile the door loaded."""
 
     def compute() -> dict[str, Any]:
-        robot = load_robot(robot_name)
-        grid = load_grid(source, robot_name)  # not counted: cached per worker, a mesh's first load is slow
-        t0 = time.perf_counter()
-        result = execute_plan(query, grid, robot, cancel=cancelled).to_json()
-        # the time limit covers the whole plan, smoothing and result building included, not only the search
-        limit = query.effective_time_limit_s
-        elapsed = time.perf_counter() - t0
-        if elapsed > limit:
-            raise PlannerTimedOut(f"the plan took {elapsed:.3g} s, over its time limit of {limit:g} s")
-        return result
+        grid = load_grid(source, robot)  # not counted: cached per worker, a mesh's first load is slow
+        mine = replace(query, termination=query.termination.with_cancel(cancelled))
+        return execute_plan(mine, grid, robot).to_json()
 
-    return _job("plan", compute, plan_robot=lambda: load_robot(robot_name).to_json())
+    return _job("plan", compute, plan_robot=robot.to_json)
 
 
 def simulate_job(plan: dict[str, Any], source: Path | InlineGrid, robot_name: str, seed: int, noise: str,

@@ -31,6 +31,7 @@ from planner.maps.nav2 import load_map
 from planner.maps.problems import list_problems
 from planner.occupancy import OccupancyGrid
 from planner.robot import load_robot
+from planner.termination import Termination
 
 COLUMNS = (
     "problem", "collided", "min_clearance_m", "reached_goal", "final_position_error_m", "cross_track_max_m",
@@ -56,7 +57,7 @@ def main(argv: list[str] | None = None) -> int:
         if str(p.map_path) not in grids:
             grids[str(p.map_path)] = load_map(p.map_path)
         grid = grids[str(p.map_path)]
-        plan = plan_path(grid, robot, p.start, p.goal, time_limit_s=p.time_limit_s).to_json()
+        plan = plan_path(grid, robot, p.start, p.goal, termination=Termination(p.time_limit_s)).to_json()
         t0 = time.perf_counter()
         sim = simulate_plan(
             grid,

@@ -30,6 +30,7 @@ from planner.closed_loop.simulator import Disturbances
 from planner.errors import InvalidInput
 from planner.occupancy import OccupancyGrid
 from planner.robot import RobotProfile
+from planner.termination import Termination
 
 GARAGE_PATROL: tuple[tuple[float, float, float], ...] = (
     (35.0, 8.05, math.pi),
@@ -111,7 +112,7 @@ def patrol(
     legs = []
     for i, (a, b) in enumerate(itertools.pairwise(goals)):
         try:
-            legs.append(plan_path(grid, robot, a, b, time_limit_s=time_limit_s).to_json())
+            legs.append(plan_path(grid, robot, a, b, termination=Termination(time_limit_s)).to_json())
         except InvalidInput as exc:
             raise InvalidInput(f"goals[{i + 1}]", str(exc)) from exc
     plan = _join(legs)

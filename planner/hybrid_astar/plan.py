@@ -9,7 +9,6 @@ Planners are cached per (map, robot, options) so repeated queries skip the dista
 from __future__ import annotations
 
 from collections import OrderedDict
-from collections.abc import Callable
 from functools import lru_cache
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -19,6 +18,7 @@ from planner.hybrid_astar.search import HybridAStar, PlannerOptions, Pose
 from planner.occupancy import OccupancyGrid
 from planner.result import PlanResult
 from planner.robot import RobotProfile
+from planner.termination import Termination
 
 if TYPE_CHECKING:
     from planner.maps.mesh_world import MeshWorld
@@ -63,12 +63,12 @@ def mesh_recheck(grid: OccupancyGrid, robot: RobotProfile, result: PlanResult) -
 
 def plan_path(
     grid: OccupancyGrid, robot: RobotProfile, start: Pose, goal: Pose,
-    options: PlannerOptions | None = None, *, time_limit_s: float | None = None,
-    cancel: Callable[[], bool] | None = None,
+    options: PlannerOptions | None = None, termination: Termination | None = None,
 ) -> PlanResult:
-    """Plan and verify. Raises :class:`~planner.errors.PlanningError` subclasses on failure."""
+    """Plan and verify; ``termination`` (time limit, cancel flag, iteration cap) goes unchanged to the search.
+    Raises :class:`~planner.errors.PlanningError` subclasses on failure."""
     planner = planner_for(grid, robot, options)
-    result = planner.plan(start, goal, time_limit_s=time_limit_s, cancel=cancel)
+    result = planner.plan(start, goal, termination)
     check = mesh_recheck(grid, robot, result)
     if check is not None:
         result.extra["mesh_check"] = check

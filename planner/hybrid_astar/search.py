@@ -28,8 +28,8 @@ import logging
 import math
 import time
 from collections import OrderedDict
-from collections.abc import Callable, Mapping
-from dataclasses import dataclass, fields, replace
+from collections.abc import Mapping
+from dataclasses import dataclass, fields
 from typing import Any
 
 import numpy as np
@@ -54,6 +54,7 @@ from planner.maps.clearance import CircleFootprint, ClearanceMap, inscribed_radi
 from planner.occupancy import OccupancyGrid
 from planner.result import PlanResult, build_states
 from planner.robot import RobotProfile
+from planner.termination import Clock, Termination
 
 log = logging.getLogger(__name__)
 
@@ -92,8 +93,6 @@ class PlannerOptions:
     greed: float = 1.0               # eq. 14j; 0 = admissible A* (slow: 7 rolls × 72 bins); smoothing recovers length
     analytic_ratio_m: float = 3.5     # try a Dubins shot every max(1, h / ratio) expansions
     heuristic_downsample: int = 0     # holonomic grid coarsening; 0 = auto (≥ 2, at most ~50k coarse cells)
-    time_limit_s: float = 5.0
-    max_iterations: int = 2_000_000
     chunk_expansions: int = 2000
     state_spacing_m: float = 0.04     # spacing of the returned states (≤ 5 cm, docs/contracts.md)
     smooth: bool = True               # shortcut the search's path with collision-checked rollable Dubins shots
@@ -125,8 +124,6 @@ class PlannerOptions:
             need(getattr(self, name) >= 0.0, name, "must be ≥ 0")
         need(self.analytic_ratio_m > 0, "analytic_ratio_m", "must be > 0")
         need(0 <= self.heuristic_downsample <= 8, "heuristic_downsample", "must be in [0, 8] (0 = auto)")
-        need(self.time_limit_s > 0, "time_limit_s", "must be > 0")
-        need(0 < self.max_iterations <= 50_000_000, "max_iterations", "must be in [1, 50 000 000]")
         need(1 <= self.chunk_expansions <= 1_000_000, "chunk_expansions", "must be in [1, 1 000 000]")
         need(0 < self.state_spacing_m <= 0.05, "state_spacing_m", "must be in (0, 0.05]")
         need(1 <= self.smooth_max_tries <= 1000, "smooth_max_tries", "must be in [1, 1000]")
@@ -138,6 +135,9 @@ class PlannerOptions:
         known = {f.name: f for f in fields(cls)}
         values: dict[str, Any] = {}
         for key, value in data.items():
+            if key in ("time_limit_s", "max_iterations"):
+                raise InvalidInput(f"options.{key}", "is not a planner option: when to stop is the request's own "
+                                                     f"{key} (CLI --time-limit), one value for every door")
             if key not in known:
                 raise InvalidInput(f"options.{key}", f"unknown option; known: {', '.join(sorted(known))}")
             default = getattr(cls(), key)
@@ -179,7 +179,7 @@ def warm_up() -> float:
     grid = OccupancyGrid.from_occupied(occupied, 0.1, name="warm-up")
     robot = load_robot()
     for reverse in (False, True):
-        HybridAStar(grid, robot, PlannerOptions(allow_reverse=reverse, time_limit_s=600.0)).plan(
+        HybridAStar(grid, robot, PlannerOptions(allow_reverse=reverse)).plan(
             (1.5, 1.5, 0.0), (6.5, 6.5, math.pi / 2))
     took = time.perf_counter() - t0
     log.info("compiled the search kernels in %.2f s (once per process)", took)
@@ -403,18 +403,16 @@ class HybridAStar:
                    f"{self.robot.footprint_padding_m:g} m) overlaps an obstacle or the map's edge")
             raise cls2(f"{which} ({pose[0]:.3f}, {pose[1]:.3f}) is in collision: {why}")
 
-    def plan(
-        self, start: Pose, goal: Pose, *, time_limit_s: float | None = None,
-        cancel: Callable[[], bool] | None = None,
-    ) -> PlanResult:
+    def plan(self, start: Pose, goal: Pose, termination: Termination | None = None) -> PlanResult:
         """Plan from ``start`` to ``goal`` (x, y, yaw in the map frame; the sphere starts and ends upright).
 
-        The time limit is the search's own: the one-off compilation (:func:`warm_up`) happens before the clock.
+        ``termination`` (default :class:`~planner.termination.Termination`'s) says when to give up; its clock
+        starts after the one-off compilation (:func:`warm_up`), so the limit is the search's own.
         """
         warm_up()
-        t0 = time.perf_counter()
-        o = self.options if time_limit_s is None else replace(self.options, time_limit_s=time_limit_s)
-        deadline = t0 + o.time_limit_s
+        clock = (termination or Termination()).start()
+        t0 = clock.t0
+        o = self.options
         start = (float(start[0]), float(start[1]), wrap(float(start[2])))
         goal = (float(goal[0]), float(goal[1]), wrap(float(goal[2])))
         self._check_endpoint(start, "start")
@@ -427,7 +425,7 @@ class HybridAStar:
                 planning_time_s=time.perf_counter() - t0,
             )
         run = _Search(self, start, goal, heur, o, self.reverse)
-        self._drive(run, start, goal, o, t0, deadline, cancel)
+        self._drive(run, start, goal, o, clock)
         motions = self._motions(run)
         raw_length = self._length(start, motions)
         t_search = time.perf_counter() - t0
@@ -438,7 +436,7 @@ class HybridAStar:
         analytic = int(run.counters[core.C_SHOT_SEGS])
         expansions = run.expansions
         if self.reverse and o.prefer_forward:
-            fwd, forward = self._forward_alternative(start, goal, heur, o, deadline, cancel, motions, run.expansions)
+            fwd, forward = self._forward_alternative(start, goal, heur, o, clock, motions, run.expansions)
             if fwd is not None:
                 expansions += fwd.expansions
                 extra["forward_alternative_expansions"] = fwd.expansions
@@ -471,11 +469,13 @@ class HybridAStar:
             extra=extra,
         )
 
-    def _drive(self, run: _Search, start: Pose, goal: Pose, o: PlannerOptions, t0: float, deadline: float,
-               cancel: Callable[[], bool] | None, fail_fast: bool = True) -> None:
+    def _drive(self, run: _Search, start: Pose, goal: Pose, o: PlannerOptions, clock: Clock,
+               fail_fast: bool = True, cap: int | None = None) -> None:
         """Run the search in compiled chunks until it finds the goal; raise the planning error otherwise."""
         checked_goal = not (fail_fast and o.dead_end_check)
         tried_from = -1
+        t0 = clock.t0
+        cap = clock.termination.max_iterations if cap is None else min(cap, clock.termination.max_iterations)
         while True:
             # 3b. Reeds–Shepp analytic expansion (reversing robots), from the start and then from the node
             #     closest to the goal by the heuristic whenever that changes, between compiled chunks.
@@ -484,7 +484,7 @@ class HybridAStar:
                 tried_from = best
                 if run.reeds_shepp_shot(best):
                     return
-            status = run.step(min(o.chunk_expansions, o.max_iterations - run.expansions))
+            status = run.step(min(o.chunk_expansions, cap - run.expansions))
             if status == core.FOUND:
                 return
             if status == core.EXHAUSTED:
@@ -496,22 +496,22 @@ class HybridAStar:
                 # 5b. Fail fast: a bounded search of the reverse problem (from the goal, every motion run
                 # backwards) that exhausts proves the goal pose cannot be approached at all.
                 checked_goal = True
-                back = self._reverse_search(start, goal, o, time.perf_counter() + GOAL_CHECK_SHARE * o.time_limit_s)
+                back = self._reverse_search(start, goal, o, clock.share(GOAL_CHECK_SHARE))
                 if back is not None:
                     raise NoValidPathFound(
                         f"no valid path: the goal pose ({goal[0]:.2f}, {goal[1]:.2f}, yaw {goal[2]:.2f}) can be "
                         f"reached from only {back} states around it, none of them the start's (a dead end or a "
                         f"heading into an obstacle)", planning_time_s=time.perf_counter() - t0,
                         expansions=run.expansions)
-            if run.expansions >= o.max_iterations:
-                raise NoValidPathFound(f"no valid path within the iteration cap of {o.max_iterations} expansions",
+            if run.expansions >= cap:
+                raise NoValidPathFound(f"no valid path within the iteration cap of {cap} expansions",
                                        planning_time_s=time.perf_counter() - t0, expansions=run.expansions)
-            if cancel is not None and cancel():
+            if clock.cancelled():
                 raise PlannerCancelled("planning was cancelled", planning_time_s=time.perf_counter() - t0,
                                        expansions=run.expansions)
-            if time.perf_counter() > deadline:
+            if clock.expired():
                 raise PlannerTimedOut(
-                    f"no path found within the time limit of {o.time_limit_s:g} s ({run.expansions} expansions)",
+                    f"no path found within the time limit of {clock.time_limit_s:g} s ({run.expansions} expansions)",
                     planning_time_s=time.perf_counter() - t0, expansions=run.expansions)
 
     def _smooth(self, start: Pose, motions: list[tuple[float, float, float]], p: np.ndarray, o: PlannerOptions
@@ -543,8 +543,8 @@ class HybridAStar:
         return cost
 
     def _forward_alternative(
-        self, start: Pose, goal: Pose, heur: HolonomicHeuristic, o: PlannerOptions, deadline: float,
-        cancel: Callable[[], bool] | None, motions: list[tuple[float, float, float]], expansions: int,
+        self, start: Pose, goal: Pose, heur: HolonomicHeuristic, o: PlannerOptions, clock: Clock,
+        motions: list[tuple[float, float, float]], expansions: int,
     ) -> tuple[_Search | None, list[tuple[float, float, float]] | None]:
         """The forward-only search run (None when not tried) and its path when it costs less than ``motions``
         by :meth:`_travel_cost` (else None).
@@ -563,11 +563,9 @@ class HybridAStar:
         cost = self._travel_cost(start, motions, o)
         if dubins_distance(*start, *goal, self.robot.min_turning_radius_m) >= cost:
             return None, None
-        cap = max(FORWARD_RETRY_MIN, expansions)
-        fo = replace(o, max_iterations=min(o.max_iterations, cap))
-        run = _Search(self, start, goal, heur, fo, False)
+        run = _Search(self, start, goal, heur, o, False)
         try:
-            self._drive(run, start, goal, fo, time.perf_counter(), deadline, cancel, fail_fast=False)
+            self._drive(run, start, goal, o, clock, fail_fast=False, cap=max(FORWARD_RETRY_MIN, expansions))
         except PlannerCancelled:
             raise
         except PlanningError:
@@ -575,13 +573,13 @@ class HybridAStar:
         forward = self._smooth(start, self._motions(run), run.p, o)
         return run, (forward if self._travel_cost(start, forward, o) < cost else None)
 
-    def _reverse_search(self, start: Pose, goal: Pose, o: PlannerOptions, deadline: float) -> int | None:
+    def _reverse_search(self, start: Pose, goal: Pose, o: PlannerOptions, clock: Clock) -> int | None:
         """Search the reverse problem within :data:`GOAL_CHECK_BUDGET` expansions: from the goal to the start
         with every motion run backwards. A path run backwards is rolled by the same kinematics with the
         heading turned by π (and the roll mirrored, which maps the symmetric roll set onto itself); a
         reversible robot's motion set is its own reverse. Returns the number of states from which the goal
         can be reached when that search exhausts them all (so the start is not among them), else None (also
-        when it runs past ``deadline``)."""
+        when ``clock`` runs out)."""
         flip = 0.0 if self.reverse else math.pi
         back_start = (goal[0], goal[1], wrap(goal[2] + flip))
         back_goal = (start[0], start[1], wrap(start[2] + flip))
@@ -589,7 +587,7 @@ class HybridAStar:
             return None
         heur = self.holonomic(back_goal[:2], back_start[:2])
         run = _Search(self, back_start, back_goal, heur, o, self.reverse)
-        while run.expansions < GOAL_CHECK_BUDGET and time.perf_counter() < deadline:
+        while run.expansions < GOAL_CHECK_BUDGET and not clock.expired():
             status = run.step(min(o.chunk_expansions, GOAL_CHECK_BUDGET - run.expansions))
             if status == core.EXHAUSTED:
                 return run.expansions

@@ -53,6 +53,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def _query(args: argparse.Namespace) -> PlanQuery:
     """The CLI arguments as the plan query every door builds (bad options are bad input here)."""
     from planner.hybrid_astar.search import PlannerOptions
+    from planner.termination import Termination
     from service.pipeline import PlanQuery
 
     options: dict[str, Any] = {}
@@ -71,7 +72,8 @@ def _query(args: argparse.Namespace) -> PlanQuery:
         options["allow_reverse"] = False
     (x0, y0, yaw0), (x1, y1, yaw1) = args.start, args.goal
     start, goal = (x0, y0, angle(args, yaw0)), (x1, y1, angle(args, yaw1))
-    return PlanQuery(start, goal, PlannerOptions.from_dict(options), args.time_limit)
+    termination = Termination() if args.time_limit is None else Termination(args.time_limit)
+    return PlanQuery(start, goal, PlannerOptions.from_dict(options), termination)
 
 
 def _pose(p: tuple[float, float, float]) -> dict[str, float]:

@@ -29,6 +29,7 @@ from planner.hybrid_astar.plan import plan_path, planner_for
 from planner.hybrid_astar.search import PlannerOptions
 from planner.occupancy import OccupancyGrid
 from planner.robot import RobotProfile
+from planner.termination import Termination
 
 log = logging.getLogger(__name__)
 
@@ -54,7 +55,7 @@ def _warm_up(robot: RobotProfile, options: PlannerOptions) -> None:
     checker.collides_many(np.array([[4.0, 3.0, 0.0]]))
     checker.clearances(np.array([[4.0, 3.0, 0.0]]))
     try:
-        plan_path(grid, robot, (1.5, 3.0, 0.0), (6.0, 3.0, 0.0), options, time_limit_s=60.0)
+        plan_path(grid, robot, (1.5, 3.0, 0.0), (6.0, 3.0, 0.0), options, Termination(60.0))
     except PlanningError as exc:  # only compilation matters here
         log.warning("warm-up plan failed: %s", exc)
 

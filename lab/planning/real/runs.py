@@ -29,6 +29,7 @@ from planner.hybrid_astar.plan import plan_path
 from planner.hybrid_astar.search import PlannerOptions
 from planner.occupancy import OccupancyGrid
 from planner.robot import RobotProfile
+from planner.termination import Termination
 
 log = logging.getLogger(__name__)
 
@@ -144,7 +145,7 @@ def run_sphereplan(problem: RealProblem, grid: OccupancyGrid, robot: RobotProfil
     """One ``plan_path`` call, timed by the wall clock; the path re-checked and measured with the polygon."""
     t0 = time.perf_counter()
     try:
-        result = plan_path(grid, robot, problem.start, problem.goal, options, time_limit_s=time_limit_s)
+        result = plan_path(grid, robot, problem.start, problem.goal, options, Termination(time_limit_s))
     except PlanningError as exc:
         elapsed = time.perf_counter() - t0
         if isinstance(exc, StartOccupied):

@@ -11,6 +11,7 @@ from planner.hybrid_astar.reeds_shepp import _roll, car_word, sphere_shot
 from planner.hybrid_astar.search import GOAL_CHECK_AFTER, HybridAStar, PlannerOptions
 from planner.occupancy import OccupancyGrid
 from planner.robot import load_robot
+from planner.termination import Termination
 from tests.pathcheck import check_path, footprint_distance, footprint_hits
 
 ROBOT = load_robot("zju-60")
@@ -97,10 +98,10 @@ def test_a_dead_end_goal_is_reported_long_before_the_time_limit():
     occ[151:167, 150:200] = False        # the slot: 0.8 m wide, 2.5 m deep, open only towards the door
     grid = OccupancyGrid.from_occupied(occ, 0.05)
     start, goal = (15.0, 3.0, 0.0), (8.5, 7.95, 0.0)  # facing out of the slot: it would have to turn inside
-    planner = HybridAStar(grid, ROBOT, PlannerOptions(allow_reverse=False, time_limit_s=120))
+    planner = HybridAStar(grid, ROBOT, PlannerOptions(allow_reverse=False))
     assert planner.pose_margin(goal) >= 0
     with pytest.raises(NoValidPathFound) as info:
-        planner.plan(start, goal)
+        planner.plan(start, goal, Termination(120))
     assert "dead end" in str(info.value)
     assert info.value.expansions <= GOAL_CHECK_AFTER + 2 * PlannerOptions().chunk_expansions
     assert info.value.planning_time_s > 0

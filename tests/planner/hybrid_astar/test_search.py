@@ -19,6 +19,7 @@ from planner.errors import (
 from planner.hybrid_astar.search import CLEARANCE_REACH_M, HybridAStar, PlannerOptions
 from planner.occupancy import OccupancyGrid
 from planner.robot import load_robot
+from planner.termination import Termination
 from tests.pathcheck import check_path, footprint_distance
 
 
@@ -100,7 +101,7 @@ def test_unreachable_goal_is_no_path_quickly():
     occ[100:200, 100:103] = True
     grid = OccupancyGrid.from_occupied(occ, 0.05)
     with pytest.raises(NoValidPathFound) as e:
-        HybridAStar(grid, load_robot()).plan((2, 2, 0), (7.5, 7.5, 0), time_limit_s=2.0)
+        HybridAStar(grid, load_robot()).plan((2, 2, 0), (7.5, 7.5, 0), Termination(2.0))
     assert e.value.code == 208
 
 
@@ -112,21 +113,34 @@ def test_narrow_gap_blocks_but_heuristic_lets_search_exhaust():
     occ[:, 100:104] = True
     occ[55:67, 100:104] = False           # 0.6 m gap: too narrow for the 0.7 m wide footprint
     grid = OccupancyGrid.from_occupied(occ, 0.05)
-    planner = HybridAStar(grid, load_robot(), PlannerOptions(time_limit_s=20))
+    planner = HybridAStar(grid, load_robot())
     with pytest.raises(NoValidPathFound):
-        planner.plan((2, 3, 0), (8, 3, 0))
+        planner.plan((2, 3, 0), (8, 3, 0), Termination(20))
 
 
 def test_timeout_and_cancel(planner):
     with pytest.raises(PlannerTimedOut) as e:
         HybridAStar(planner.grid, planner.robot, PlannerOptions(greed=0.0, chunk_expansions=50)).plan(
-            (2, 2, 0), (18, 18, math.pi / 2), time_limit_s=0.05)
+            (2, 2, 0), (18, 18, math.pi / 2), Termination(0.05))
     assert e.value.code == 207
     flag = threading.Event()
     flag.set()
     with pytest.raises(PlannerCancelled):
         HybridAStar(planner.grid, planner.robot, PlannerOptions(greed=0.0, chunk_expansions=50)).plan(
-            (2, 2, 0), (18, 18, math.pi / 2), cancel=flag.is_set)
+            (2, 2, 0), (18, 18, math.pi / 2), Termination(cancel=flag.is_set))
+
+
+def test_iteration_cap_comes_from_the_termination(planner):
+    with pytest.raises(NoValidPathFound, match="iteration cap of 40 expansions") as e:
+        HybridAStar(planner.grid, planner.robot, PlannerOptions(greed=0.0, chunk_expansions=10)).plan(
+            (2, 2, 0), (18, 18, math.pi / 2), Termination(max_iterations=40))
+    assert e.value.expansions == 40
+
+
+@pytest.mark.parametrize("key", ["time_limit_s", "max_iterations"])
+def test_when_to_stop_is_not_a_planner_option(key):
+    with pytest.raises(InvalidInput, match=rf"options\.{key}.*request's own"):
+        PlannerOptions.from_dict({key: 1})
 
 
 def test_options_validation():

@@ -11,6 +11,7 @@ from planner.hybrid_astar.plan import plan_path
 from planner.maps.nav2 import load_map
 from planner.maps.problems import list_problems
 from planner.robot import load_robot
+from planner.termination import Termination
 from tests.pathcheck import check_path
 
 PROBLEMS = list_problems()
@@ -31,14 +32,14 @@ def test_shipped_problem(problem):
     grid = _grid(problem.map_path)
     robot = load_robot()
     if problem.solvable:
-        result = plan_path(grid, robot, problem.start, problem.goal, time_limit_s=problem.time_limit_s)
+        result = plan_path(grid, robot, problem.start, problem.goal, termination=Termination(problem.time_limit_s))
         assert check_path(grid, robot, result.states, problem.start, problem.goal) == []
         if "mesh_check" in result.extra:
             assert result.extra["mesh_check"]["collides"] is False
     else:
         t0 = time.perf_counter()
         with pytest.raises(NoValidPathFound):
-            plan_path(grid, robot, problem.start, problem.goal, time_limit_s=problem.time_limit_s)
+            plan_path(grid, robot, problem.start, problem.goal, termination=Termination(problem.time_limit_s))
         assert time.perf_counter() - t0 < problem.time_limit_s + 1.0
 
 
@@ -52,5 +53,5 @@ def test_shipped_problem_with_reversing(problem):
     grid = _grid(problem.map_path)
     robot = load_robot()
     result = plan_path(grid, robot, problem.start, problem.goal, PlannerOptions(allow_reverse=True),
-                       time_limit_s=problem.time_limit_s)
+                       Termination(problem.time_limit_s))
     assert check_path(grid, robot, result.states, problem.start, problem.goal) == []
