@@ -112,6 +112,14 @@ def test_circle_verb_and_calibrate_from_its_output(capsys: pytest.CaptureFixture
         want = 2 * load_robot("daedalus").roll_model.turning_radius(math.radians(float(roll)))
         assert summary["diameter_m"] == pytest.approx(want, rel=0.1)
         assert summary["commanded_rod_rate"]["max_m_s"] <= 0.1 + 1e-9
+        # every circle run splits its turn; the surrogate's spin is what its table implies beyond the lean
+        assert "implied" in summary["spin_source"] and summary["held_roll_deg"] == summary["mean_roll_deg"]
+        assert summary["mean_spin_rad_s"] + summary["mean_no_spin_yaw_rate_rad_s"] == pytest.approx(
+            summary["mean_yaw_rate_rad_s"]
+        )
+        held = math.radians(summary["held_roll_deg"])
+        assert summary["no_spin_diameter_m"] == pytest.approx(2 * 0.232 / math.tan(held))
+        assert summary["mean_spin_rad_s"] > 0  # the paper's table is tighter than 2r/tan(roll)
         outs.append(str(out))
     # --heading-deg only turns the start: on the surrogate the same circle, started 90 deg to the left
     out = tmp_path / "c15h.json"
