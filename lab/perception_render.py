@@ -173,10 +173,22 @@ class Box:
 
 @dataclass(frozen=True)
 class Scene:
-    """Objects the rays can hit; a ray that hits none sees the sky (grey :data:`SKY`)."""
+    """Objects the rays can hit; a ray that hits none sees the sky (grey :data:`SKY`). The objects are given in the
+    scene's own frame, which stands in the map at ``pose`` (x, y, yaw: turned about the vertical, then moved), so
+    one course can be put in front of a sphere anywhere."""
 
     objects: tuple[Plane | Box, ...]
     sky: float = SKY
+    pose: tuple[float, float, float] = (0.0, 0.0, 0.0)
+
+    def placed(self, x: float, y: float, yaw_rad: float) -> Scene:
+        """The same scene standing at (x, y) turned by ``yaw_rad``."""
+        return Scene(self.objects, self.sky, (x, y, yaw_rad))
+
+    def to_local(self, points_map: np.ndarray) -> np.ndarray:
+        """Map points (N, 3) in the scene's own frame."""
+        x, y, yaw = self.pose
+        return (np.asarray(points_map, float) - [x, y, 0.0]) @ Rotation.from_rotvec([0, 0, yaw]).as_matrix()
 
 
 @dataclass(frozen=True)
@@ -195,17 +207,20 @@ def _cast(camera: Pinhole, scene: Scene, u: np.ndarray, v: np.ndarray) -> tuple[
     """(grey, depth, object index, landing point) of the rays through pixel coordinates ``u``, ``v`` (N,)."""
     d_opt = np.stack([(u - camera.cx) / camera.fx, (v - camera.cy) / camera.fy, np.ones_like(u)], axis=1)
     dirs = d_opt @ camera.rotation.T
-    ts = np.stack([obj.hit(camera.position, dirs) for obj in scene.objects], axis=1)
+    turn = Rotation.from_rotvec([0, 0, scene.pose[2]]).as_matrix()
+    origin_local, dirs_local = scene.to_local(camera.position[None])[0], dirs @ turn  # a rigid motion keeps t
+    ts = np.stack([obj.hit(origin_local, dirs_local) for obj in scene.objects], axis=1)
     which = np.argmin(ts, axis=1)
     t = ts[np.arange(len(u)), which]
     sky = ~np.isfinite(t)
     which = np.where(sky, -1, which)
     points = camera.position + dirs * np.where(sky, np.nan, t)[:, None]
+    local = origin_local + dirs_local * np.where(sky, np.nan, t)[:, None]
     grey = np.full(len(u), scene.sky)
     for k, obj in enumerate(scene.objects):
         sel = which == k
         if sel.any():
-            grey[sel] = texture(points[sel], obj.seed, obj.texture_scale)
+            grey[sel] = texture(local[sel], obj.seed, obj.texture_scale)  # the texture moves with the scene
     return grey, np.where(sky, np.inf, t), which, points  # t along d_opt (z = 1) is the optical depth
 
 

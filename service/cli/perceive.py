@@ -60,7 +60,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                       help="nearest depth searched, m; sets the disparity range fx·B / min-depth (default 1.5)")
     sgbm.add_argument("--num-disparities", type=int, default=None,
                       help="disparity range, a multiple of 16 (default: from --min-depth)")
-    sgbm.add_argument("--block-size", type=int, default=5, help="matched block size, odd (default 5)")
+    sgbm.add_argument("--block-size", type=int, default=3, help="matched block size, odd (default 3)")
     sgbm.add_argument("--mode", choices=MODES, default="sgbm", help="SGBM variant (default sgbm)")
     parser.set_defaults(func=run)
 
