@@ -167,7 +167,7 @@ def test_the_filters_drop_by_their_first_reason() -> None:
 def test_bad_pairs_name_the_input(level) -> None:
     pair, _ = level
     li, ri = _infos(pair)
-    with pytest.raises(InvalidInput, match="right.*mismatched image sizes"):
+    with pytest.raises(InvalidInput, match=r"right.*mismatched image sizes"):
         perceive(pair.left.image, pair.right.image[:, :-1], li, ri, (0, 0, 0))
     with pytest.raises(InvalidInput, match="left_info"):
         perceive(pair.left.image[:-1], pair.right.image[:-1], li, ri, (0, 0, 0))
