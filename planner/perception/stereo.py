@@ -61,7 +61,6 @@ class ObstacleScan:
         """The JSON of ``sphereplan perceive`` (without the disparity image)."""
         return {
             "frame_id": "map",
-            "points_map": np.round(self.points_map, 4).tolist(),
             "origin_map": [round(float(v), 6) for v in self.origin_map],
             "count": len(self.points_map),
             "measured": self.measured,
@@ -69,6 +68,7 @@ class ObstacleScan:
             "baseline_m": self.baseline_m,
             "num_disparities": self.num_disparities,
             "timings_s": {k: round(v, 6) for k, v in self.timings_s.items()},
+            "points_map": np.round(self.points_map, 4).tolist(),
         }
 
 

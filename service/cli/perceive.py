@@ -117,6 +117,7 @@ def run(args: argparse.Namespace) -> int:
         result["disparity"] = str(args.disparity)
     if args.plot:
         result["plot"] = str(args.plot)
+    result["points_map"] = result.pop("points_map")  # the long list last
 
     def write_mcap(out: str) -> None:
         from service.ros import write_perception_mcap

@@ -10,11 +10,11 @@ def test_rows_and_table() -> None:
     rows = bench_perception(runs=2, resolutions=((270, 206, 0.1),))
     (row,) = rows
     assert row["width"] == 270 and row["runs"] == 2 and row["threads"] == 1
-    assert 0 < row["sgbm_median_s"] <= row["median_s"] <= row["max_s"]
+    assert 0 < row["sgbm_median_s"] <= row["median_s"] <= row["max_s"] and row["cpu_median_s"] > 0
     assert row["num_disparities"] % 16 == 0 and row["kept"] > 0 and row["eis_median_s"] > 0
     assert row["box_points"] > 0 and row["box_error"] < 0.05
     table = format_perception_bench(rows)
-    assert "paper s" in table and "270 × 206" in table and "0.1" in table
+    assert "paper s" in table and "CPU s" in table and "270 × 206" in table and "0.1" in table
 
 
 def test_the_papers_three_resolutions() -> None:
