@@ -7,8 +7,8 @@ The steps, as in the paper:
 3. the pinhole model inverted gives camera coordinates ``P̃_c`` (:mod:`planner.perception.triangulate`);
 4. the extrinsic matrix T of the camera on the sphere, from the fused pose (eq. 4: ``P̃_c = T·P_g``), takes
    them to the map (:mod:`planner.perception.mount`);
-5. the thresholds drop the ground, reflections under it, suspended and too-distant points
-   (:mod:`planner.perception.obstacle_filter`).
+5. the thresholds drop the ground, reflections under it, suspended and too-distant points, and specks of a
+   few pixels (:mod:`planner.perception.obstacle_filter`).
 
 For the live map (marking and ray-traced clearing as Nav2's obstacle layer does), :func:`obstacle_points`
 returns just ``(points_map, origin_map)``: the kept points (N, 3) and the point every ray was seen from, the
@@ -29,7 +29,7 @@ from planner.errors import InvalidInput
 from planner.perception.camera_info import CameraInfo, stereo_baseline_m
 from planner.perception.disparity import StereoOptions, rectify, sgbm_disparity, to_grey
 from planner.perception.mount import CameraPose, camera_pose, check_angle, rotate
-from planner.perception.obstacle_filter import ObstacleFilter
+from planner.perception.obstacle_filter import SMALL_BLOB, ObstacleFilter
 from planner.perception.triangulate import points_from_disparity
 
 #: the names a pair's inputs are reported by in errors (the CLI passes its own option names)
@@ -132,6 +132,9 @@ def perceive(left: np.ndarray, right: np.ndarray, left_info: CameraInfo, right_i
 
     t = time.perf_counter()
     keep, dropped = obstacles.apply(pts_map, (x, y), radius_m)
+    specks = obstacles.specks(pixels[keep], disparity.shape)
+    dropped[SMALL_BLOB] = int(specks.sum())
+    keep[np.flatnonzero(keep)[specks]] = False
     timings["filter"] = time.perf_counter() - t
     timings["total"] = time.perf_counter() - t_start
     return ObstacleScan(pts_map[keep], cam.position.copy(), pixels[keep], len(pts_map), dropped, baseline, n_disp,

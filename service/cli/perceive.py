@@ -55,6 +55,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                          help="drop points higher than this: suspended (default: the shell's top 2r + 0.10)")
     filters.add_argument("--max-range", type=positive_float, default=10.0,
                          help="drop points farther than this from the sphere, on the ground (default 10)")
+    filters.add_argument("--min-blob", type=int, default=20,
+                         help="drop patches of fewer kept pixels than this in the left image (default 20; 1 = off)")
     sgbm = parser.add_argument_group("semi-global block matching (OpenCV StereoSGBM)")
     sgbm.add_argument("--min-depth", type=positive_float, default=1.5,
                       help="nearest depth searched, m; sets the disparity range fx·B / min-depth (default 1.5)")
@@ -62,6 +64,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                       help="disparity range, a multiple of 16 (default: from --min-depth)")
     sgbm.add_argument("--block-size", type=int, default=3, help="matched block size, odd (default 3)")
     sgbm.add_argument("--mode", choices=MODES, default="sgbm", help="SGBM variant (default sgbm)")
+    sgbm.add_argument("--full-width", action="store_true",
+                      help="also match the left image's first num-disparities columns, which OpenCV leaves blind "
+                           "(pads the pair; about a quarter slower)")
     parser.set_defaults(func=run)
 
 
@@ -85,11 +90,12 @@ def run(args: argparse.Namespace) -> int:
         raise InvalidInput("--min-height", "must be ≥ 0")
     try:
         stereo = StereoOptions(min_depth_m=args.min_depth, num_disparities=args.num_disparities,
-                               block_size=args.block_size, mode=args.mode)
+                               block_size=args.block_size, mode=args.mode, full_width=args.full_width)
         obstacles = ObstacleFilter(min_height_m=args.min_height, max_height_m=args.max_height,
-                                   max_range_m=args.max_range)
+                                   max_range_m=args.max_range, min_blob_px=args.min_blob)
     except InvalidInput as exc:
-        raise InvalidInput("--" + exc.field.removesuffix("_m").replace("_", "-"), exc.msg) from None
+        field = {"min_blob_px": "min_blob"}.get(exc.field, exc.field)
+        raise InvalidInput("--" + field.removesuffix("_m").replace("_", "-"), exc.msg) from None
     robot = load_robot(args.robot)
     fields = ("--left", "--right", "--left-info", "--right-info")
     left, right = read_image(args.left, "--left"), read_image(args.right, "--right")
@@ -112,7 +118,7 @@ def run(args: argparse.Namespace) -> int:
     result = {**scan.to_json(), "pose": {"x": x, "y": y, "yaw": yaw}, "roll": roll, "pitch": pitch,
               "robot": {"name": robot.name, "radius_m": robot.radius_m},
               "filters": {"min_height_m": obstacles.min_height_m, "max_height_m": obstacles.ceiling_m(robot.radius_m),
-                          "max_range_m": obstacles.max_range_m}}
+                          "max_range_m": obstacles.max_range_m, "min_blob_px": obstacles.min_blob_px}}
     if args.disparity:
         result["disparity"] = str(args.disparity)
     if args.plot:

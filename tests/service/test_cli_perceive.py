@@ -51,7 +51,7 @@ def test_prints_the_points_the_library_finds(files, capsys) -> None:
     np.testing.assert_allclose(points, scan.points_map, atol=1e-4)
     np.testing.assert_allclose(result["origin_map"], [1.0, 2.25, 0.3], atol=1e-6)
     assert result["baseline_m"] == pytest.approx(0.5)
-    assert set(result["dropped"]) == {"below_ground", "ground", "suspended", "too_far"}
+    assert set(result["dropped"]) == {"below_ground", "ground", "suspended", "too_far", "small_blob"}
     assert result["timings_s"]["total"] > 0 and result["pose"] == {"x": 1.0, "y": 2.0, "yaw": 0.0}
 
 
@@ -144,6 +144,7 @@ def test_a_calibration_with_a_nan_exits_2(files, capsys, tmp_path) -> None:
     (["--pose", 0, 0, 0, "--pitch", -7.0], "--pitch"),
     (["--pose", 0, 0, 0, "--num-disparities", 40], "--num-disparities"),
     (["--pose", 0, 0, 0, "--block-size", 4], "--block-size"),
+    (["--pose", 0, 0, 0, "--min-blob", 0], "--min-blob"),
     (["--pose", 0, 0, 0, "--out", "/no/such/folder/p.json"], "--out"),
 ])
 def test_bad_numbers_exit_2_naming_the_field(files, capsys, extra, field) -> None:

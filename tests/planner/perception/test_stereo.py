@@ -85,11 +85,12 @@ def test_the_box_9_m_ahead_is_measured_within_2_percent(case, level, leaning) ->
 def test_ground_bar_far_wall_and_what_is_behind_are_dropped(case, level, leaning) -> None:
     pair, scan = level if case == "level" else leaning
     pose = (0.0, 0.0, 0.0) if case == "level" else (XY[0], XY[1], YAW)
-    # every kept point lies on the box (the only obstacle in range under the shell's top), give or take 25 cm:
-    # wall and ground pixels along the box's outline take the box's disparity (block matching fattens the
-    # nearer surface) and so land on the box, not on the wall or the ground
+    # every kept point lies on the box (the only obstacle in range under the shell's top), give or take 40 cm:
+    # one point's depth error at 9 m reaches about 3 % (0.27 m; the 90th percentile is 1.3–1.6 %), and wall and
+    # ground pixels along the box's outline take the box's disparity (block matching fattens the nearer surface),
+    # so they land on the box, not on the wall (4.4 m behind it) or the ground
     near = _distance_to_box(scan.points_map, BOX_AHEAD, pose)
-    assert np.all(near < 0.25), np.sort(near)[-5:]
+    assert np.all(near < 0.4), np.sort(near)[-5:]
     seen = pair.left.hit[scan.pixels[:, 0], scan.pixels[:, 1]]
     assert not np.any(seen == SCENE.objects.index(BAR_ABOVE))
     assert (seen == SCENE.objects.index(WALL_FAR)).mean() < 0.05 and (seen == 0).mean() < 0.05  # the outline only
@@ -100,6 +101,26 @@ def test_ground_bar_far_wall_and_what_is_behind_are_dropped(case, level, leaning
     forward = np.array([math.cos(pose[2]), math.sin(pose[2]), 0.0])
     assert np.all((scan.points_map - scan.origin_map) @ forward > 0)
     assert np.all(_distance_to_box(scan.points_map, BOX_BEHIND, pose) > 2.0)
+
+
+def test_full_width_sees_a_box_in_the_band_opencv_leaves_blind() -> None:
+    from lab.perception_render import Box, Scene
+
+    side = Box("box to the left", (6.0, 2.6, 0.0), (6.5, 3.4, 0.6), seed=13)  # image columns 67-119 of 541
+    pair = render_pair(Scene((*SCENE.objects, side)))
+    hit = SCENE.objects.__len__()
+    blind = perceive(pair.left.image, pair.right.image, *_infos(pair), (0.0, 0.0, 0.0))
+    full = perceive(pair.left.image, pair.right.image, *_infos(pair), (0.0, 0.0, 0.0),
+                    stereo=StereoOptions(full_width=True))
+    assert blind.num_disparities == 144 and np.all(blind.pixels[:, 1] >= 144)
+    on_side = pair.left.hit[full.pixels[:, 0], full.pixels[:, 1]] == hit
+    assert on_side.sum() > 0.5 * (pair.left.hit == hit).sum()
+    near = np.minimum(_distance_to_box(full.points_map, side), _distance_to_box(full.points_map, BOX_AHEAD))
+    assert np.all(near < 0.4)  # nothing else appears in the band
+    truth = pair.left.points[full.pixels[on_side, 0], full.pixels[on_side, 1]]
+    dist = np.linalg.norm(full.points_map[on_side] - full.origin_map, axis=1)
+    true = np.linalg.norm(truth - full.origin_map, axis=1)
+    assert abs(np.median(dist) - np.median(true)) / np.median(true) < 0.02
 
 
 def test_the_bar_is_measured_then_dropped_as_suspended(level) -> None:
@@ -160,8 +181,16 @@ def test_the_filters_drop_by_their_first_reason() -> None:
     assert keep.tolist() == [False, False, True, False, False, False]
     assert dropped == {"below_ground": 1, "ground": 1, "suspended": 2, "too_far": 1}
     assert f.ceiling_m(0.3) == pytest.approx(0.7)
+    # specks: a 3-pixel patch goes, a 5 × 5 one stays with min_blob_px = 20; 1 keeps everything
+    speck = [(10, 10), (10, 11), (11, 12)]
+    patch = [(30 + i, 40 + j) for i in range(5) for j in range(5)]
+    pixels = np.array(speck + patch)
+    assert ObstacleFilter().specks(pixels, (60, 80)).tolist() == [True] * 3 + [False] * 25
+    assert not ObstacleFilter(min_blob_px=1).specks(pixels, (60, 80)).any()
     with pytest.raises(InvalidInput, match="max_height_m"):
         ObstacleFilter(max_height_m=0.01)
+    with pytest.raises(InvalidInput, match="min_blob_px"):
+        ObstacleFilter(min_blob_px=0)
 
 
 def test_bad_pairs_name_the_input(level) -> None:
