@@ -80,7 +80,7 @@ def camera_info_from_dict(doc: Any, field: str = "camera_info") -> CameraInfo:
     if k[0, 0] <= 0 or k[1, 1] <= 0 or k[2, 2] != 1 or k[2, 0] != 0 or k[2, 1] != 0:
         raise InvalidInput(field, "'camera_matrix' must be [fx 0 cx; 0 fy cy; 0 0 1] with fx, fy > 0")
     model = doc.get("distortion_model", "plumb_bob")
-    if model not in DISTORTION_MODELS:
+    if not isinstance(model, str) or model not in DISTORTION_MODELS:
         raise InvalidInput(field, f"'distortion_model' {model!r} is not one of {', '.join(DISTORTION_MODELS)}")
     d = _matrix(doc, "distortion_coefficients", None, field) if "distortion_coefficients" in doc else np.zeros(5)
     if d.size and d.size not in DISTORTION_MODELS[model]:
@@ -96,7 +96,7 @@ def camera_info_from_dict(doc: Any, field: str = "camera_info") -> CameraInfo:
     if p[0, 0] <= 0 or p[1, 1] <= 0 or p[2, 2] != 1:
         raise InvalidInput(field, "'projection_matrix' must be [fx' 0 cx' Tx; 0 fy' cy' Ty; 0 0 1 0] with fx', fy' > 0")
     name = doc.get("camera_name", "")
-    return CameraInfo(size[0], size[1], k, d, str(model), r, p, str(name) if name is not None else "")
+    return CameraInfo(size[0], size[1], k, d, model, r, p, name if isinstance(name, str) else "")
 
 
 def read_camera_info(path: str | Path, field: str = "--camera-info") -> CameraInfo:

@@ -24,6 +24,28 @@ def read_image(path: str | Path, field: str) -> np.ndarray:
     return np.asarray(image)
 
 
+def decode_image(data: bytes, field: str, max_pixels: int = 16_000_000) -> np.ndarray:
+    """An image file's bytes (PNG, JPEG, ...) as an array, grey or BGR as stored; undecodable → InvalidInput.
+    The size is read from the header first: more than ``max_pixels`` pixels is refused before decoding (a small
+    compressed file can hold a huge picture)."""
+    import io
+
+    import cv2
+    from PIL import Image, UnidentifiedImageError
+
+    try:
+        with Image.open(io.BytesIO(data)) as header:
+            width, height = header.size
+    except (UnidentifiedImageError, OSError, ValueError, Image.DecompressionBombError):
+        raise InvalidInput(field, "is not a readable image file (PNG, JPEG, ...)") from None
+    if width * height > max_pixels:
+        raise InvalidInput(field, f"is {width} × {height} px; at most {max_pixels} pixels are accepted")
+    image = cv2.imdecode(np.frombuffer(data, dtype=np.uint8), cv2.IMREAD_UNCHANGED) if data else None
+    if image is None:
+        raise InvalidInput(field, "is not a readable image file (PNG, JPEG, ...)")
+    return np.asarray(image[:, :, :3] if image.ndim == 3 and image.shape[2] == 4 else image)
+
+
 def write_image(path: str | Path, image: np.ndarray, field: str) -> None:
     """Write ``image`` (format from the extension); a refusal is InvalidInput(field)."""
     import cv2

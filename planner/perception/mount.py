@@ -41,7 +41,8 @@ def check_angle(value: float, field: str) -> float:
     if not math.isfinite(value):
         raise InvalidInput(field, f"{value!r} is not a finite angle")
     if abs(value) > MAX_ANGLE_RAD:
-        raise InvalidInput(field, f"{value:g} rad is outside [−2π, 2π] (degrees given as radians? use --degrees)")
+        raise InvalidInput(field, f"{value:g} rad is outside [−2π, 2π]: degrees given as radians? "
+                                  "(say they are degrees: --degrees)")
     return float(value)
 
 

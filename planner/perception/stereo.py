@@ -55,16 +55,25 @@ class ObstacleScan:
     num_disparities: int
     timings_s: dict[str, float]
     camera: CameraPose = field(repr=False)
+    pose: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    roll_rad: float = 0.0
+    pitch_rad: float = 0.0
+    filters: dict[str, float] = field(default_factory=dict)
     disparity: np.ndarray | None = field(default=None, repr=False)
 
     def to_json(self) -> dict[str, Any]:
-        """The JSON of ``sphereplan perceive`` (without the disparity image)."""
+        """The JSON of ``sphereplan perceive`` and ``POST /v1/perceive`` (without the disparity image)."""
+        x, y, yaw = self.pose
         return {
             "frame_id": "map",
+            "pose": {"x": x, "y": y, "yaw": yaw},
+            "roll": self.roll_rad,
+            "pitch": self.pitch_rad,
             "origin_map": [round(float(v), 6) for v in self.origin_map],
             "count": len(self.points_map),
             "measured": self.measured,
             "dropped": dict(self.dropped),
+            "filters": dict(self.filters),
             "baseline_m": self.baseline_m,
             "num_disparities": self.num_disparities,
             "timings_s": {k: round(v, 6) for k, v in self.timings_s.items()},
@@ -137,8 +146,11 @@ def perceive(left: np.ndarray, right: np.ndarray, left_info: CameraInfo, right_i
     keep[np.flatnonzero(keep)[specks]] = False
     timings["filter"] = time.perf_counter() - t
     timings["total"] = time.perf_counter() - t_start
+    filters = {"min_height_m": obstacles.min_height_m, "max_height_m": obstacles.ceiling_m(radius_m),
+               "max_range_m": obstacles.max_range_m, "min_blob_px": obstacles.min_blob_px}
     return ObstacleScan(pts_map[keep], cam.position.copy(), pixels[keep], len(pts_map), dropped, baseline, n_disp,
-                        timings, cam, disparity if keep_disparity else None)
+                        timings, cam, (x, y, yaw), float(roll_rad), float(pitch_rad), filters,
+                        disparity if keep_disparity else None)
 
 
 def obstacle_points(left: np.ndarray, right: np.ndarray, left_info: CameraInfo, right_info: CameraInfo,

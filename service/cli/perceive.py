@@ -115,10 +115,7 @@ def run(args: argparse.Namespace) -> int:
                        lambda: plot_scan(scan, left, (x, y, yaw), obstacles.max_range_m, args.plot))
     if args.disparity:
         _write_disparity(args.disparity, scan.disparity)
-    result = {**scan.to_json(), "pose": {"x": x, "y": y, "yaw": yaw}, "roll": roll, "pitch": pitch,
-              "robot": {"name": robot.name, "radius_m": robot.radius_m},
-              "filters": {"min_height_m": obstacles.min_height_m, "max_height_m": obstacles.ceiling_m(robot.radius_m),
-                          "max_range_m": obstacles.max_range_m, "min_blob_px": obstacles.min_blob_px}}
+    result = {**scan.to_json(), "robot": {"name": robot.name, "radius_m": robot.radius_m}}
     if args.disparity:
         result["disparity"] = str(args.disparity)
     if args.plot:
