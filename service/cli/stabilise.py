@@ -1,7 +1,7 @@
 """``sphereplan stabilise``: electronic image stabilisation (paper 001 §3.3) of one frame or a folder of frames.
 
 One frame: ``--image IN.png --roll R --pitch P --camera-info C.yaml --out OUT.png``. A batch: ``--frames DIR --imu
-IMU.csv [--fps F] --camera-info C.yaml --out OUT_DIR`` (the CSV's rows are ``time, roll, pitch``; see
+IMU.csv [--fps F] --camera-info C.yaml --out-dir OUT_DIR`` (the CSV's rows are ``time, roll, pitch``; see
 :mod:`planner.perception.imu_log`). Angles are the camera's attitude as its IMU measures it, REP-103 (roll about x
 forward, pitch about y left, right-handed), radians unless ``--degrees``. Prints a JSON summary.
 """
@@ -32,7 +32,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "interpolated (default: one CSV row per frame)")
     add_degrees_flag(parser)
     parser.add_argument("--camera-info", required=True, help="the camera's camera_info YAML (K and distortion)")
-    parser.add_argument("--out", required=True, help="the stabilised image (--image) or folder (--frames)")
+    parser.add_argument("--out", help="with --image: the stabilised image")
+    parser.add_argument("--out-dir", help="with --frames: the folder the stabilised frames go to (made if missing)")
     parser.set_defaults(func=run)
 
 
@@ -43,9 +44,11 @@ def run(args: argparse.Namespace) -> int:
         for name in ("roll", "pitch"):
             if getattr(args, name) is None:
                 raise InvalidInput(f"--{name}", "is required with --image")
-        for name in ("imu", "fps"):
+        for name in ("imu", "fps", "out_dir"):
             if getattr(args, name) is not None:
-                raise InvalidInput(f"--{name}", "only applies to --frames")
+                raise InvalidInput(f"--{name.replace('_', '-')}", "only applies to --frames")
+        if args.out is None:
+            raise InvalidInput("--out", "is required with --image")
         check_output(args.out, "--out", {"png", "jpg", "jpeg", "bmp", "tif", "tiff"})
         info = read_camera_info(args.camera_info, "--camera-info")
         emit_json(_one(args, info), None)
@@ -55,6 +58,10 @@ def run(args: argparse.Namespace) -> int:
             raise InvalidInput(f"--{name}", "only applies to --image; --frames takes its angles from --imu")
     if args.imu is None:
         raise InvalidInput("--imu", "is required with --frames")
+    if args.out is not None:
+        raise InvalidInput("--out", "only applies to --image; give --out-dir with --frames")
+    if args.out_dir is None:
+        raise InvalidInput("--out-dir", "is required with --frames")
     info = read_camera_info(args.camera_info, "--camera-info")
     emit_json(_batch(args, info), None)
     return 0
@@ -79,11 +86,11 @@ def _batch(args: argparse.Namespace, info: Any) -> dict[str, Any]:
     from planner.perception.image_io import read_image, write_image
     from planner.perception.imu_log import list_frames, read_imu_csv
 
-    out_dir = Path(args.out)
+    out_dir = Path(args.out_dir)
     if out_dir.exists() and not out_dir.is_dir():
-        raise InvalidInput("--out", f"{out_dir} is a file; give a folder for --frames")
+        raise InvalidInput("--out-dir", f"{out_dir} is a file; give a folder")
     if not out_dir.parent.is_dir():
-        raise InvalidInput("--out", f"folder {out_dir.parent} does not exist")
+        raise InvalidInput("--out-dir", f"folder {out_dir.parent} does not exist")
     frames = list_frames(args.frames, "--frames")
     log = read_imu_csv(args.imu, args.degrees, "--imu")
     rolls, pitches = log.at_frames(len(frames), args.fps, "--imu")
@@ -95,7 +102,7 @@ def _batch(args: argparse.Namespace, info: Any) -> dict[str, Any]:
             image = read_image(frame, f"--frames ({frame.name})")
             out, _ = stabilise(image, info, float(roll), float(pitch), f"--frames ({frame.name})")
             target = out_dir / frame.name
-            write_image(target, out, "--out")
+            write_image(target, out, "--out-dir")
             written.append({"frame": frame.name, "out": str(target), "roll": round(float(roll), 6),
                             "pitch": round(float(pitch), 6)})
     return {"frames": len(written), "out": str(out_dir), "stabilised": written}

@@ -67,7 +67,7 @@ def test_a_folder_with_an_imu_csv(scene_files, capsys) -> None:
     folder, level = scene_files
     out = folder / "stable"
     code, stdout, err = run(capsys, "stabilise", "--frames", folder / "frames", "--imu", folder / "imu.csv",
-                            "--degrees", "--camera-info", folder / "camera.yaml", "--out", out, "-q")
+                            "--degrees", "--camera-info", folder / "camera.yaml", "--out-dir", out, "-q")
     assert code == 0, err
     assert json.loads(stdout)["frames"] == len(ATTITUDES)
     for i in range(len(ATTITUDES)):
@@ -75,7 +75,7 @@ def test_a_folder_with_an_imu_csv(scene_files, capsys) -> None:
         assert ncc(result, level, result > 0) > 0.9
     # with --fps the frames are taken at 0, 0.05, 0.1 s: the middle one halfway between rows 0 and 1
     code, stdout, err = run(capsys, "stabilise", "--frames", folder / "frames", "--imu", folder / "imu.csv",
-                            "--fps", 20, "--degrees", "--camera-info", folder / "camera.yaml", "--out", out, "-q")
+                            "--fps", 20, "--degrees", "--camera-info", folder / "camera.yaml", "--out-dir", out, "-q")
     assert code == 0, err
     middle = json.loads(stdout)["stabilised"][1]
     assert middle["roll"] == pytest.approx(math.radians(-1.0), abs=1e-6)
@@ -87,6 +87,7 @@ def test_a_folder_with_an_imu_csv(scene_files, capsys) -> None:
     (["--roll", 10, "--pitch", 0], "--roll"),  # 10 rad: degrees given as radians
     (["--pitch", 0], "--roll"),
     (["--roll", 0, "--pitch", 0, "--imu", "x.csv"], "--imu"),
+    (["--roll", 0, "--pitch", 0, "--out-dir", "x"], "--out-dir"),
 ])
 def test_bad_angles_exit_2_naming_the_field(scene_files, capsys, extra, field) -> None:
     folder, _ = scene_files
@@ -110,8 +111,8 @@ def test_bad_files_exit_2_naming_the_field(scene_files, capsys, tmp_path) -> Non
     assert code == 2 and "--image" in err and "100 × 100" in err
     (tmp_path / "nan.csv").write_text("0,0,0\n0.1,nan,0\n0.2,0,0\n")
     code, _, err = run(capsys, "stabilise", "--frames", folder / "frames", "--imu", tmp_path / "nan.csv",
-                       "--camera-info", folder / "camera.yaml", "--out", tmp_path / "o")
+                       "--camera-info", folder / "camera.yaml", "--out-dir", tmp_path / "o")
     assert code == 2 and "--imu" in err and "row 2: roll" in err
     code, _, err = run(capsys, "stabilise", "--frames", tmp_path / "none", "--imu", folder / "imu.csv",
-                       "--camera-info", folder / "camera.yaml", "--out", tmp_path / "o")
+                       "--camera-info", folder / "camera.yaml", "--out-dir", tmp_path / "o")
     assert code == 2 and "--frames" in err
