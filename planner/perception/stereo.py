@@ -128,6 +128,11 @@ def perceive(left: np.ndarray, right: np.ndarray, left_info: CameraInfo, right_i
 
     p = left_info.p
     n_disp = stereo.disparities_for(float(p[0, 0]), baseline)
+    width, need = grey_l.shape[1], stereo.block_size // 2 + (0 if stereo.full_width else n_disp)
+    if width <= need:  # OpenCV's own condition, width − numDisparities > blockSize / 2, on the padded width
+        raise InvalidInput(fields[0], f"is {width} px wide: SGBM with {n_disp} disparities needs more than {need} "
+                                      "columns (raise the nearest depth, lower the number of disparities, or match "
+                                      "the full width)")
     t = time.perf_counter()
     disparity = sgbm_disparity(grey_l, grey_r, n_disp, stereo)
     timings["sgbm"] = time.perf_counter() - t

@@ -208,6 +208,14 @@ def test_bad_pairs_name_the_input(level) -> None:
         perceive(pair.left.image, pair.right.image, li, li, (0, 0, 0))  # Tx = 0: not a right camera
     with pytest.raises(InvalidInput, match="num_disparities"):
         StereoOptions(num_disparities=40)
+    narrow = {"image_width": 20, "image_height": 10,
+              "camera_matrix": {"rows": 3, "cols": 3, "data": [50, 0, 10, 0, 50, 5, 0, 0, 1]}}
+    li = camera_info_from_dict({**narrow, "projection_matrix": {"data": [50, 0, 10, 0, 0, 50, 5, 0, 0, 0, 1, 0]}})
+    ri = camera_info_from_dict({**narrow, "projection_matrix": {"data": [50, 0, 10, -25, 0, 50, 5, 0, 0, 0, 1, 0]}})
+    tiny = np.zeros((10, 20), np.uint8)
+    with pytest.raises(InvalidInput, match=r"left.*20 px wide"):  # OpenCV would refuse 20 columns for 32 disparities
+        perceive(tiny, tiny, li, ri, (0, 0, 0))
+    assert perceive(tiny, tiny, li, ri, (0, 0, 0), stereo=StereoOptions(full_width=True)).measured == 0
     assert check_angle(-2 * math.pi, "a") == -2 * math.pi
     with pytest.raises(InvalidInput, match="degrees"):
         check_angle(7.0, "a")
