@@ -55,7 +55,7 @@ def _matrix(doc: dict[str, Any], key: str, shape: tuple[int, int] | None, field:
         raise InvalidInput(field, f"'{key}' is missing or not a {{rows, cols, data}} mapping")
     try:
         data = np.asarray(entry["data"], dtype=float).ravel()
-    except (TypeError, ValueError):
+    except (TypeError, ValueError, OverflowError):
         raise InvalidInput(field, f"'{key}.data' is not a list of numbers") from None
     if not np.all(np.isfinite(data)):
         raise InvalidInput(field, f"'{key}.data' holds a non-finite number")
