@@ -219,3 +219,43 @@ def test_bad_pairs_name_the_input(level) -> None:
     assert check_angle(-2 * math.pi, "a") == -2 * math.pi
     with pytest.raises(InvalidInput, match="degrees"):
         check_angle(7.0, "a")
+
+
+def test_a_distorted_tilted_raw_pair_is_rectified_first() -> None:
+    """Raw cameras turned off the rectified axes (R ≠ I) with plumb-bob distortion (eq. 8): the pipeline rectifies
+    with the calibration's R, D, P and measures the box as from the ideal pair."""
+    from dataclasses import replace
+
+    import cv2
+    from scipy.spatial.transform import Rotation
+
+    from lab.perception_render import render
+
+    ideal = render_pair(SCENE, supersample=1)
+    d = np.array([-0.12, 0.03, 0.0005, -0.0004, 0.0])
+    raws, infos = [], []
+    for cam, info, turn in ((ideal.left_camera, ideal.left_info, [0.01, -0.02, 0.015]),
+                            (ideal.right_camera, ideal.right_info, [-0.015, 0.01, -0.01])):
+        q = Rotation.from_rotvec(turn).as_matrix()  # X_rect = Q·X_raw: ROS's rectification_matrix
+        raw_cam = replace(cam, rotation=cam.rotation @ q)
+        undistorted = render(raw_cam, SCENE, supersample=2).image
+        k = np.array([[cam.fx, 0, cam.cx], [0, cam.fy, cam.cy], [0, 0, 1.0]])
+        # the distorted frame: each of its pixels samples the undistorted render where eq. 8 says it came from
+        grid = np.stack(np.meshgrid(np.arange(cam.width, dtype=np.float32), np.arange(cam.height, dtype=np.float32)),
+                        axis=-1).reshape(-1, 1, 2)
+        src = cv2.undistortPoints(grid, k, d, P=k).reshape(cam.height, cam.width, 2)
+        raws.append(cv2.remap(undistorted, src[..., 0], src[..., 1], cv2.INTER_LINEAR))
+        infos.append(camera_info_from_dict({**info, "distortion_coefficients": {"rows": 1, "cols": 5, "data": list(d)},
+                                            "rectification_matrix": {"rows": 3, "cols": 3,
+                                                                     "data": q.ravel().tolist()}}))
+    assert not infos[0].is_rectified
+    scan = perceive(raws[0], raws[1], infos[0], infos[1], (0.0, 0.0, 0.0))
+    near = _distance_to_box(scan.points_map, BOX_AHEAD)
+    on_box = near < 0.4
+    assert on_box.sum() > 0.5 * (ideal.left.hit == BOX).sum() and np.all(near < 0.4)
+    # the box face is at x = 9 m: its points' median, seen through the rectified frame, within 2 %
+    assert abs(np.median(scan.points_map[on_box, 0]) - 9.0) / 9.0 < 0.02
+    # without the calibration's R the same frames put the box elsewhere
+    unturned = [replace(i, r=np.eye(3)) for i in infos]
+    wrong = perceive(raws[0], raws[1], *unturned, (0.0, 0.0, 0.0))
+    assert np.mean(_distance_to_box(wrong.points_map, BOX_AHEAD) > 0.4) > 0.2
