@@ -49,6 +49,7 @@ from service.wire import (
     ErrorBody,
     Health,
     MapInfo,
+    PerceiveRequest,
     PlanRequest,
     PlanResultOut,
     ReconfigureIn,
@@ -273,6 +274,17 @@ async def post_tensegrity_static(request: Request, body: TensegrityStaticRequest
     return await answer(request, service, service.submit_tensegrity_static, body)
 
 
+perception = APIRouter(prefix="/v1", tags=["perception"])
+
+
+@perception.post("/perceive", responses=ERRORS)
+async def post_perceive(request: Request, body: PerceiveRequest, service: Service) -> Response:
+    """Stereo obstacle perception (paper 001 §3.2): base64 images and camera_info documents of a pair, the
+    sphere's pose and roll → the kept obstacle points in the map frame (``points_map``, N × 3, m) and the sensor
+    origin (``origin_map``): what ``sphereplan perceive`` prints."""
+    return await answer(request, service, service.submit_perceive, body)
+
+
 maps = APIRouter(prefix="/v1", tags=["maps"])
 
 
@@ -401,6 +413,7 @@ def create_app(settings: ServiceSettings | None = None, service: PlanningService
     app.include_router(reconfigure)
     app.include_router(vpip)
     app.include_router(tensegrity)
+    app.include_router(perception)
     app.include_router(maps)
     app.include_router(robots)
     app.include_router(viewer)
