@@ -4,20 +4,24 @@ Run from the repository root (a few minutes on one core)::
 
     python -m lab.vpip_mujoco_figures --out docs/img            # all figures and docs/img/vpip-mujoco.json
 
-1. Held-roll circles at 5°, 10°, 15° (ω = 1 rad/s, 30 s) on the MuJoCo plant → diameters, Fig. 10 style;
-   each repeated from six start headings (physically the same run on a flat floor; the spread is the
-   runs' chaotic detail) and, from four headings, for the contact and roll-controller variants of
-   docs/vpip.md ("Why the circles are wider") → ``vpip-mujoco-diameters.png``.
-2. Fig. 7: ω(t) for fixed θ_VPIP 10/20/30/40° (roll held at 0) and the simple driver, MuJoCo plant.
-3. `calibrate` from those circles → a daedalus profile whose roll table is the physics'.
-4. A daedalus plan on maps/cave.yaml (problem ``cave_first_bend``) made with that profile, rolled by the
-   VPIP cascade in MuJoCo; cross-track error reported (and the same with the paper's table, for contrast).
+For each contact setting of the daedalus profile (``paper``: the paper's Gazebo defaults; ``regolith``):
+
+1. Held-roll circles at 5°, 10°, 15° (ω = 1 rad/s, 30 s, the default ``rod-rate`` gains) on the MuJoCo
+   plant, each repeated from six start headings (physically the same run on a flat floor; the spread is
+   the runs' chaotic detail), with the spin/lean split of every turn; the same from four headings with
+   Table 1's gains (``--gains table1``) for contrast → ``vpip-mujoco-diameters.png`` (diameter against
+   the roll actually held, both contacts).
+2. `calibrate` from the heading-0 circles (what ``vpip calibrate --rolls 5,10,15 --contact C`` does) →
+   a daedalus profile whose roll table is that ground's physics.
+3. A daedalus plan on maps/cave.yaml (problem ``cave_first_bend``) made with that table, rolled by the VPIP
+   cascade in MuJoCo on the same contact; cross-track error reported.
+
+Then Fig. 7 (fixed θ_VPIP, roll held at 0, and the simple driver) on the paper contact.
 """
 
 from __future__ import annotations
 
 import argparse
-import dataclasses
 import json
 import logging
 import math
@@ -32,13 +36,16 @@ from planner.robot import RobotProfile, load_robot, profile_from_dict
 from planner.termination import Termination
 from planner.vpip.api import calibrate_from_circles, profile_toml
 from planner.vpip.cascade import run_schedule
-from planner.vpip.circle import run_circle
+from planner.vpip.choices import CONTACTS
+from planner.vpip.circle import PAPER_DIAMETERS_M, run_circle
 from planner.vpip.plot import plot_circle, plot_schedule
 
 log = logging.getLogger("vpip_mujoco_figures")
 
+ROLLS = (5.0, 10.0, 15.0)
+"""Desired rolls (deg) of paper 000 §5."""
 
-def _fig7(profile: RobotProfile, out: Path, duration: float) -> dict[str, Any]:
+def _fig7(profile: RobotProfile, out: Path, duration: float, contact: str) -> dict[str, Any]:
     import matplotlib
 
     matplotlib.use("Agg")
@@ -47,15 +54,17 @@ def _fig7(profile: RobotProfile, out: Path, duration: float) -> dict[str, Any]:
     runs: dict[str, Any] = {}
     fig, ax = plt.subplots(figsize=(9, 4.5), constrained_layout=True)
     for theta in (10, 20, 30, 40):
-        r = run_circle(profile, 0.0, duration, "mujoco", "vpip", theta_vpip_rad=math.radians(theta))
+        r = run_circle(
+            profile, 0.0, duration, "mujoco", "vpip", theta_vpip_rad=math.radians(theta), contact=contact
+        )
         runs[f"theta_{theta}"] = r["summary"]
         ax.plot(r["series"]["t"], _smooth(r["series"]["omega_rad_s"]), lw=1.2, label=f"VPIP θ = {theta}°")
-    r = run_circle(profile, 0.0, duration, "mujoco", "simple")
+    r = run_circle(profile, 0.0, duration, "mujoco", "simple", contact=contact)
     runs["simple"] = r["summary"]
     ax.plot(r["series"]["t"], _smooth(r["series"]["omega_rad_s"]), "k", lw=1.4, label="simple (§2)")
     ax.set_xlabel("time (s)")
     ax.set_ylabel("ω (rad/s, 0.5 s moving average)")
-    ax.set_title("Fig. 7 on the MuJoCo plant: fixed θ_VPIP (open loop, roll held at 0) vs the simple driver")
+    ax.set_title(f"Fig. 7 on the MuJoCo plant ({contact} contact): fixed θ_VPIP (open loop, roll held at 0) vs simple")
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8, ncol=5, loc="upper left")
     fig.savefig(out / "vpip-mujoco-fig7.png", dpi=90)
@@ -66,108 +75,90 @@ def _fig7(profile: RobotProfile, out: Path, duration: float) -> dict[str, Any]:
 HEADINGS = (0.0, 0.4, 0.8, 1.2, 1.6, 2.0)
 """Start headings (rad) of the repeated circle runs."""
 
-VARIANTS: dict[str, dict[str, float]] = {
-    "no-slip contact (Table 1 friction 100), no spin friction (Gazebo/ODE point contact)": {
-        "ground_friction": 100.0,
-        "rod_tip_friction": 100.0,
-        "ground_torsional_friction_m": 0.0,
-    },
-    "no-slip contact (friction 100), spin friction 0.03 m": {"ground_friction": 100.0, "rod_tip_friction": 100.0},
-    "rod feet no-slip (friction 100), shell unchanged": {"rod_tip_friction": 100.0},
-    "roll k_d 0.5 (D part below the 20 deg limit at rod-driven roll rates)": {"roll_kd": 0.5},
-    "roll anti-windup 10 deg (= k_i x 5 deg, the other reading of Table 1)": {"roll_integral_limit_deg": 10.0},
-    "roll k_d 0.5 and anti-windup 10 deg (roll held closer)": {"roll_kd": 0.5, "roll_integral_limit_deg": 10.0},
-}
-"""Variants of the ``[vpip]`` section measured beside the default (keys override the profile's)."""
-
-SHORT = {
-    "ground_friction": "μ shell",
-    "rod_tip_friction": "μ feet",
-    "ground_torsional_friction_m": "spin fr.",
-    "roll_kd": "roll k_d",
-    "roll_integral_limit_deg": "roll AW°",
-}
-"""Legend abbreviations of the override keys."""
-
-
-def _with_vpip(profile: RobotProfile, overrides: dict[str, float]) -> RobotProfile:
-    extra = dict(profile.extra)
-    extra["vpip"] = {**dict(extra["vpip"]), **overrides}
-    return dataclasses.replace(profile, extra=extra)
+STAT_KEYS = (
+    "diameter_m",
+    "diameter_from_heading_m",
+    "no_spin_diameter_m",
+    "spin_lean_diameter_m",
+    "held_roll_deg",
+    "std_roll_deg",
+    "mean_omega_rad_s",
+    "mean_spin_rad_s",
+    "mean_no_spin_yaw_rate_rad_s",
+    "mean_yaw_rate_rad_s",
+    "turned_deg",
+)
+"""Summary numbers the docs quote, as median (range) over the start headings."""
 
 
 def _stats(runs: list[dict[str, Any]]) -> dict[str, Any]:
-    """Median, min and max over repeated runs of the numbers the docs quote (null fits left out)."""
+    """Median, min and max over repeated runs of :data:`STAT_KEYS` (null fits left out), rod-rate extremes."""
     out: dict[str, Any] = {"runs": len(runs)}
-    for key in (
-        "diameter_m",
-        "diameter_from_heading_m",
-        "no_spin_diameter_m",
-        "mean_roll_deg",
-        "mean_omega_rad_s",
-        "mean_spin_rad_s",
-        "mean_no_spin_yaw_rate_rad_s",
-        "mean_yaw_rate_rad_s",
-        "turned_deg",
-    ):
+    for key in STAT_KEYS:
         v = np.array([r[key] for r in runs if r.get(key) is not None], dtype=float)
         out[key] = (
             {"median": float(np.median(v)), "min": float(v.min()), "max": float(v.max()), "n": int(v.size)}
             if v.size
             else None
         )
+    out["max_measured_rod_rate_m_s"] = max(r["measured_rod_rate"]["max_m_s"] for r in runs)
+    out["max_p95_measured_rod_rate_m_s"] = max(r["measured_rod_rate"]["p95_m_s"] for r in runs)
+    out["max_commanded_rod_rate_m_s"] = max(r["commanded_rod_rate"]["max_m_s"] for r in runs)
+    out["max_roll_pid_saturated_fraction"] = max(r.get("roll_pid", {}).get("output_saturated_fraction", 0.0)
+                                                 for r in runs)
     return out
 
 
-def _ensemble(profile: RobotProfile, duration: float, headings: tuple[float, ...]) -> dict[str, Any]:
+def _ensemble(
+    profile: RobotProfile, duration: float, headings: tuple[float, ...], contact: str, gains: str
+) -> dict[str, Any]:
     out: dict[str, Any] = {}
-    for roll in (5.0, 10.0, 15.0):
+    for roll in ROLLS:
         runs = [
-            run_circle(profile, math.radians(roll), duration, "mujoco", "vpip", heading_rad=h)["summary"]
+            run_circle(
+                profile, math.radians(roll), duration, "mujoco", "vpip", heading_rad=h, contact=contact, gains=gains
+            )["summary"]
             for h in headings
         ]
         out[f"{roll:g}"] = _stats(runs)
         out[f"{roll:g}"]["rod_feet_first_heading"] = runs[0].get("rod_feet")
         out[f"{roll:g}"]["roll_pid_first_heading"] = runs[0].get("roll_pid")
-        log.info("ensemble roll %g: %s", roll, out[f"{roll:g}"]["diameter_m"])
+        log.info("%s/%s roll %g: %s", contact, gains, roll, out[f"{roll:g}"]["diameter_m"])
     return out
 
 
 def _diameter_figure(report: dict[str, Any], out: Path) -> None:
+    """Diameter against the roll actually held, both contact settings, with the no-spin curve and the paper."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    rolls = np.array([5.0, 10.0, 15.0])
     fig, ax = plt.subplots(figsize=(9, 5.5), constrained_layout=True)
-    fine = np.linspace(4.0, 16.0, 100)
-    ax.plot(fine, 2 * 0.232 / np.tan(np.radians(fine)), "k-", lw=0.8, label="no spin, roll held: 2r / tan(roll)")
-    ax.fill_between(rolls, 0.7 * np.array([2.6, 2.0, 1.7]), 1.3 * np.array([2.6, 2.0, 1.7]), color="C3", alpha=0.12,
-                    label="paper ± 30 %")
-    ax.plot(rolls, [2.6, 2.0, 1.7], "C3s", ms=8, label="paper §5 (Gazebo)")
-    ens = report["circle_ensemble"]
-    for dx, key, mark, label in (
-        (-0.25, "diameter_m", "C0o", "default: circle fit"),
-        (0.0, "diameter_from_heading_m", "C0^", "default: 2·path / turned"),
-    ):
-        for i, roll in enumerate(rolls):
-            st = ens[f"{roll:g}"][key]
-            if st is None:
+    fine = np.linspace(3.0, 16.0, 100)
+    ax.plot(fine, 2 * 0.232 / np.tan(np.radians(fine)), "k-", lw=0.8, label="no spin: 2r / tan(held roll)")
+    paper = np.array([PAPER_DIAMETERS_M[r] for r in ROLLS])
+    ax.plot(ROLLS, paper, "C3s", ms=8, label="paper §5 (Gazebo), at the roll asked for")
+    for contact, colour in zip(CONTACTS, ("C0", "C2"), strict=False):
+        for gains, mark in (("rod-rate", "o"), ("table1", "x")):
+            ens = report["contacts"][contact].get(f"ensemble_{gains}")
+            if ens is None:
                 continue
-            ax.errorbar(roll + dx, st["median"], yerr=[[st["median"] - st["min"]], [st["max"] - st["median"]]],
-                        fmt=mark, capsize=3, label=label if i == 0 else None)
-    held = [ens[f"{r:g}"]["no_spin_diameter_m"]["median"] for r in rolls]
-    ax.plot(rolls, held, "kD", mfc="none", ms=7, label="default: 2r / tan(roll actually held), median")
-    for j, (name, res) in enumerate(report["variants"].items()):
-        med = [res[f"{r:g}"]["diameter_m"]["median"] if res[f"{r:g}"]["diameter_m"] else np.nan for r in rolls]
-        over = report["variant_overrides"][name]
-        short = ", ".join(f"{SHORT.get(k, k)} {v:g}" for k, v in over.items())
-        ax.plot(rolls + 0.25 + 0.1 * j, med, "x", color=f"C{j + 4}", ms=7, label=f"variant {short}: fit, median")
-    ax.set_xlabel("desired roll (deg)")
+            for i, roll in enumerate(ROLLS):
+                st, held = ens[f"{roll:g}"]["diameter_m"], ens[f"{roll:g}"]["held_roll_deg"]
+                if st is None:
+                    continue
+                ax.errorbar(
+                    held["median"], st["median"],
+                    xerr=[[held["median"] - held["min"]], [held["max"] - held["median"]]],
+                    yerr=[[st["median"] - st["min"]], [st["max"] - st["median"]]],
+                    fmt=colour + mark, capsize=3, mfc="none" if gains == "table1" else colour,
+                    label=f"{contact} contact, {gains} gains: fit, median (range)" if i == 0 else None,
+                )
+    ax.set_xlabel("held roll (deg, mean measured after settling)")
     ax.set_ylabel("circle diameter (m)")
     ax.set_ylim(0, 11)
-    ax.set_title("Held-roll circles on the MuJoCo plant (30 s, ω = 1 rad/s asked): median, range over start headings")
+    ax.set_title("Held-roll circles on the MuJoCo plant (30 s, ω = 1 rad/s asked), 5°/10°/15° asked")
     ax.grid(alpha=0.3)
     ax.legend(fontsize=7, loc="upper right")
     fig.savefig(out / "vpip-mujoco-diameters.png", dpi=90)
@@ -179,14 +170,48 @@ def _smooth(values: list[float], n: int = 50) -> np.ndarray:
     return np.convolve(v, np.ones(n) / n, mode="same")
 
 
-def _cave(profile: RobotProfile, problem_name: str) -> tuple[dict[str, Any], dict[str, Any]]:
+def _cave(profile: RobotProfile, problem_name: str, contact: str) -> tuple[dict[str, Any], dict[str, Any]]:
     problems = {p.name: p for p in load_problem_set("maps/problems/cave.json")}
     prob = problems[problem_name]
     grid = load_map(prob.map_path)
     plan = plan_path(grid, profile, prob.start, prob.goal, termination=Termination(60.0)).to_json()
     duration = float(plan["states"][-1]["t"])
-    result = run_schedule(plan, profile, plant="mujoco", max_duration_s=3.0 * duration + 20.0)
+    result = run_schedule(plan, profile, plant="mujoco", max_duration_s=3.0 * duration + 20.0, contact=contact)
     return plan, result
+
+
+def _contact_report(daedalus: RobotProfile, contact: str, out: Path, args: argparse.Namespace) -> dict[str, Any]:
+    """Circles, ensembles, calibration and the cave run for one contact setting."""
+    rep: dict[str, Any] = {}
+    circles = []
+    for roll in ROLLS:
+        r = run_circle(daedalus, math.radians(roll), args.duration, "mujoco", "vpip", contact=contact)
+        plot_circle(r, out / f"vpip-mujoco-{contact}-circle{int(roll)}.png")
+        circles.append(r["summary"])
+        log.info("%s roll %g: diameter %s", contact, roll, r["summary"]["diameter_m"])
+    rep["circles"] = circles
+    rep["ensemble_rod-rate"] = _ensemble(daedalus, args.duration, HEADINGS, contact, "rod-rate")
+    rep["ensemble_table1"] = _ensemble(daedalus, args.duration, HEADINGS[:4], contact, "table1")
+    cal = calibrate_from_circles(circles, daedalus)
+    rep["calibration"] = {k: cal[k] for k in ("roll_model", "table", "source")}
+    import tomllib
+
+    table_profile = profile_from_dict(tomllib.loads(profile_toml(daedalus, cal["roll_model"])), "daedalus")
+    for name, prof in (("own_table", table_profile), ("paper_table", daedalus)):
+        try:
+            plan, result = _cave(prof, args.problem, contact)
+        except Exception as exc:  # a planning failure is a result too
+            rep[f"cave_{name}"] = {"error": f"{type(exc).__name__}: {exc}"}
+            continue
+        plot_schedule(result, out / f"vpip-mujoco-{contact}-cave-{name.replace('_', '-')}.png", plan)
+        rep[f"cave_{name}"] = {
+            "problem": args.problem,
+            "plan_length_m": plan["length_m"],
+            "plan_min_turning_radius_m": prof.min_turning_radius_m,
+            **result["summary"],
+        }
+        log.info("%s cave %s: %s", contact, name, result["summary"])
+    return rep
 
 
 def main() -> None:
@@ -203,46 +228,12 @@ def main() -> None:
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     daedalus = load_robot("daedalus")
-    report: dict[str, Any] = {}
-
-    circles = []
-    for roll in (5.0, 10.0, 15.0):
-        r = run_circle(daedalus, math.radians(roll), args.duration, "mujoco", "vpip")
-        plot_circle(r, out / f"vpip-mujoco-circle{int(roll)}.png")
-        circles.append(r["summary"])
-        log.info("roll %g: diameter %s", roll, r["summary"]["diameter_m"])
-    report["circles"] = circles
-    report["circle_ensemble"] = _ensemble(daedalus, args.duration, HEADINGS)
-    report["variants"] = {
-        name: _ensemble(_with_vpip(daedalus, over), args.duration, HEADINGS[:4]) for name, over in VARIANTS.items()
-    }
-    report["variant_overrides"] = VARIANTS
+    report: dict[str, Any] = {"contacts": {c: _contact_report(daedalus, c, out, args) for c in CONTACTS}}
     _diameter_figure(report, out)
-    simple = run_circle(daedalus, math.radians(10.0), args.duration, "mujoco", "simple")
+    simple = run_circle(daedalus, math.radians(10.0), args.duration, "mujoco", "simple", contact="paper")
     plot_circle(simple, out / "vpip-mujoco-simple10.png")
-    report["simple_circle_10"] = simple["summary"]
-
-    report["fig7"] = _fig7(daedalus, out, 20.0)
-
-    cal = calibrate_from_circles(circles, daedalus)
-    report["calibration"] = {k: cal[k] for k in ("roll_model", "table", "source")}
-    import tomllib
-
-    physics_profile = profile_from_dict(tomllib.loads(profile_toml(daedalus, cal["roll_model"])), "daedalus")
-    for name, prof in (("mujoco_table", physics_profile), ("paper_table", daedalus)):
-        try:
-            plan, result = _cave(prof, args.problem)
-        except Exception as exc:  # a planning failure is a result too
-            report[f"cave_{name}"] = {"error": f"{type(exc).__name__}: {exc}"}
-            continue
-        plot_schedule(result, out / f"vpip-mujoco-cave-{name.replace('_', '-')}.png", plan)
-        report[f"cave_{name}"] = {
-            "problem": args.problem,
-            "plan_length_m": plan["length_m"],
-            "plan_min_turning_radius_m": prof.min_turning_radius_m,
-            **result["summary"],
-        }
-        log.info("cave %s: %s", name, result["summary"])
+    report["simple_circle_10_paper_contact"] = simple["summary"]
+    report["fig7_paper_contact"] = _fig7(daedalus, out, 20.0, "paper")
     (out / "vpip-mujoco.json").write_text(json.dumps(report, indent=2, allow_nan=False) + "\n")
 
 

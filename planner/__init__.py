@@ -7,6 +7,7 @@ imported on first use, so ``import planner`` stays cheap for the command line.
 * :mod:`planner.maps` — nav2 map codec, catalogue, problem sets, mesh worlds, the clearance model
 * :mod:`planner.hybrid_astar` — paper 001 §4.1: the spherical Hybrid A* (:func:`plan_path`)
 * :mod:`planner.closed_loop` — paper 001 §3, §4.2: simulation, odometry/GNSS fusion, MPC tracking
+* :mod:`planner.perception` — paper 001 §3.2–3.3: stereo obstacle points, image stabilisation
 * :mod:`planner.spherobot` — paper 004: reconfiguration with P on top
 * :mod:`planner.vpip` — paper 000: VPIP plane → 16 rod lengths
 * :mod:`planner.tensegrity` — paper 002: TeXploR statics and gaits
@@ -58,6 +59,10 @@ _EXPORTS: dict[str, str] = {
     # paper 001 §3, §4.2
     "SimulationOptions": "planner.closed_loop.simulate",
     "simulate_plan": "planner.closed_loop.simulate",
+    # paper 001 §3.2-3.3
+    "obstacle_points": "planner.perception.stereo",
+    "read_camera_info": "planner.perception.camera_info",
+    "stabilise": "planner.perception.eis",
     # paper 004
     "plan_reconfiguration": "planner.spherobot.reconfigure",
     # paper 000

@@ -36,6 +36,8 @@ from planner.spherobot.request import ReconfigureRequest
 from planner.termination import Termination
 from service.grids import grid_png, load_map_file
 from service.jobs import (
+    PERCEIVE_FIELDS,
+    perceive_job,
     plan_job,
     reconfigure_job,
     simulate_job,
@@ -51,6 +53,7 @@ from service.pool import START_TIMEOUT_S, SupervisedPool
 from service.settings import ServiceSettings
 from service.wire import (
     InlineGrid,
+    PerceiveRequest,
     PlanIn,
     PlanRequest,
     ReconfigureIn,
@@ -347,6 +350,37 @@ class PlanningService:
         self.resolve_robot(request.robot)
         return self._submit(tensegrity_static_job, _radians(request.theta1, request.degrees),
                             _radians(request.theta2, request.degrees), request.robot, request.verify)
+
+    def submit_perceive(self, request: PerceiveRequest) -> Future[Outcome]:
+        """Decode and check a stereo pair (images, calibrations, sizes, angles) and queue its perception."""
+        import base64
+        import binascii
+
+        from planner.perception.camera_info import camera_info_from_dict
+        from planner.perception.image_io import decode_image
+        from planner.perception.mount import check_angle
+        from planner.perception.obstacle_filter import ObstacleFilter
+        from planner.perception.stereo import check_pair
+
+        self.resolve_robot(request.robot)
+        images = []
+        for field, text in zip(PERCEIVE_FIELDS[:2], (request.left_image, request.right_image), strict=True):
+            try:
+                data = base64.b64decode(text, validate=True)
+            except (binascii.Error, ValueError):
+                raise InvalidInput(field, "is not base64 text") from None
+            images.append(decode_image(data, field))
+        left_info = camera_info_from_dict(request.left_info, "left_info")
+        right_info = camera_info_from_dict(request.right_info, "right_info")
+        check_pair(images[0], images[1], left_info, right_info, PERCEIVE_FIELDS)
+        pose = (request.pose.x, request.pose.y,
+                check_angle(_radians(request.pose.yaw, request.degrees), "pose.yaw"))
+        roll = check_angle(_radians(request.roll, request.degrees), "roll")
+        pitch = check_angle(_radians(request.pitch, request.degrees), "pitch")
+        obstacles = ObstacleFilter(min_height_m=request.min_height_m, max_height_m=request.max_height_m,
+                                   max_range_m=request.max_range_m, min_blob_px=request.min_blob_px)
+        return self._submit(perceive_job, images[0], images[1], left_info, right_info, pose, roll, pitch,
+                            request.robot, obstacles)
 
     def plan(self, request: PlanRequest, timeout_s: float | None = None) -> Outcome:
         """Blocking plan: the :class:`Outcome`, with request errors and busy mapped to outcomes too. A plan

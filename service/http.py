@@ -52,6 +52,7 @@ from service.wire import (
     ErrorBody,
     Health,
     MapInfo,
+    PerceiveRequest,
     PlanRequest,
     PlanResultOut,
     ReconfigureIn,
@@ -263,6 +264,7 @@ ReconfigureBody = Annotated[ReconfigureIn, Depends(json_body(ReconfigureIn))]
 VpipRodsBody = Annotated[VpipRodsRequest, Depends(json_body(VpipRodsRequest))]
 VpipScheduleBody = Annotated[VpipScheduleRequest, Depends(json_body(VpipScheduleRequest))]
 TensegrityStaticBody = Annotated[TensegrityStaticRequest, Depends(json_body(TensegrityStaticRequest))]
+PerceiveBody = Annotated[PerceiveRequest, Depends(json_body(PerceiveRequest))]
 MapName = Annotated[str, PathParam(pattern=NAME_PATTERN, description="a map in the maps folder")]
 ERRORS: dict[int | str, dict[str, Any]] = {
     code: {"model": ErrorBody, "description": text} for code, text in
@@ -347,6 +349,17 @@ async def post_tensegrity_static(request: Request, body: TensegrityStaticBody, s
     """The four hybrid static states of the TeXploR two-arc robot (paper 002) for slider angles θ1, θ2:
     what ``sphereplan tensegrity static`` prints."""
     return await answer(request, service, service.submit_tensegrity_static, body)
+
+
+perception = APIRouter(prefix="/v1", tags=["perception"])
+
+
+@perception.post("/perceive", responses=ERRORS, openapi_extra=body_doc(PerceiveRequest))
+async def post_perceive(request: Request, body: PerceiveBody, service: Service) -> Response:
+    """Stereo obstacle perception (paper 001 §3.2): base64 images and camera_info documents of a pair, the
+    sphere's pose and roll → the kept obstacle points in the map frame (``points_map``, N × 3, m) and the sensor
+    origin (``origin_map``): what ``sphereplan perceive`` prints."""
+    return await answer(request, service, service.submit_perceive, body)
 
 
 maps = APIRouter(prefix="/v1", tags=["maps"])
@@ -484,6 +497,7 @@ def create_app(settings: ServiceSettings | None = None, service: PlanningService
     app.include_router(reconfigure)
     app.include_router(vpip)
     app.include_router(tensegrity)
+    app.include_router(perception)
     app.include_router(maps)
     app.include_router(robots)
     app.include_router(viewer)

@@ -25,6 +25,9 @@ from service.outcome import Outcome, error_outcome, ok_outcome, outcome_of_excep
 from service.pipeline import PlanQuery, execute_plan
 from service.settings import MAX_TIME_LIMIT_S
 
+#: the names a ``/v1/perceive`` request's parts are reported by
+PERCEIVE_FIELDS = ("left_image", "right_image", "left_info", "right_info")
+
 if TYPE_CHECKING:
     from planner.closed_loop.simulate import SimulationOptions
     from planner.spherobot.request import ReconfigureRequest
@@ -153,3 +156,18 @@ def vpip_schedule_job(plan: dict[str, Any], robot_name: str, driver: str, termin
 
     return _job("vpip schedule", lambda: schedule_report(plan, robot_name, driver,
                                                          termination=termination.with_cancel(cancelled)))
+
+
+def perceive_job(left: np.ndarray, right: np.ndarray, left_info: Any, right_info: Any,
+                 pose: tuple[float, float, float], roll: float, pitch: float, robot_name: str | None,
+                 obstacles: Any) -> Outcome:
+    """``perceive`` of one stereo pair (what ``sphereplan perceive`` prints); angles in radians."""
+    from planner.perception.stereo import perceive
+
+    def compute() -> dict[str, Any]:
+        robot = load_robot(robot_name)
+        scan = perceive(left, right, left_info, right_info, pose, roll, pitch, robot.radius_m,
+                        obstacles=obstacles, fields=PERCEIVE_FIELDS)
+        return {**scan.to_json(), "robot": {"name": robot.name, "radius_m": robot.radius_m}}
+
+    return _job("perceive", compute)

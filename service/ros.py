@@ -2,8 +2,9 @@
 
 Every builder returns a message as a plain dict in the ROS 2 field layout (``nav_msgs/msg/OccupancyGrid``,
 ``nav_msgs/msg/Path``, ``visualization_msgs/msg/MarkerArray``, ``geometry_msgs/msg/PoseStamped``,
-``sensor_msgs/msg/JointState``). CDR serialisation is left to the ecosystem's libraries: the MCAP
-writer is ``mcap-ros2-support``'s, and the message definitions it embeds as schemas are ROS 2 Humble's,
+``sensor_msgs/msg/JointState``, ``sensor_msgs/msg/PointCloud2``). CDR serialisation is left to the ecosystem's
+libraries: the MCAP writer is ``mcap-ros2-support``'s, and the message definitions it embeds as schemas are ROS 2
+Humble's,
 taken from the ``rosbags`` type store (not typed in here). Reading a map back (``--map run.mcap``) uses
 ``mcap-ros2-support``'s decoder for an MCAP file and ``rosbags`` for a rosbag2 folder (sqlite3 or mcap).
 
@@ -36,6 +37,13 @@ PATH = "nav_msgs/msg/Path"
 MARKER_ARRAY = "visualization_msgs/msg/MarkerArray"
 POSE_STAMPED = "geometry_msgs/msg/PoseStamped"
 JOINT_STATE = "sensor_msgs/msg/JointState"
+POINT_CLOUD2 = "sensor_msgs/msg/PointCloud2"
+POINT_STAMPED = "geometry_msgs/msg/PointStamped"
+
+#: topics of a perception MCAP
+POINTS_TOPIC, SENSOR_ORIGIN_TOPIC, ROBOT_POSE_TOPIC = "/perception/obstacles", "/perception/origin", "/perception/pose"
+#: sensor_msgs/PointField datatype FLOAT32
+FLOAT32 = 7
 
 #: visualization_msgs/Marker constants
 LINE_STRIP, ADD = 4, 0
@@ -94,6 +102,15 @@ def path_msg(rows: Iterable[Sequence[float]], t0: float) -> dict[str, Any]:
     """``nav_msgs/Path`` from rows ``(t, x, y, yaw)``: each pose stamped ``t0 + t``."""
     poses = [pose_stamped(t0 + t, x, y, yaw) for t, x, y, yaw in rows]
     return {"header": header(t0), "poses": poses}
+
+
+def point_cloud2_msg(points: np.ndarray, t: float, frame_id: str = FRAME) -> dict[str, Any]:
+    """``sensor_msgs/PointCloud2`` of (N, 3) points (m): an unordered cloud (height 1), fields x, y, z as
+    little-endian float32, 12 bytes a point."""
+    xyz = np.ascontiguousarray(np.asarray(points, dtype="<f4").reshape(-1, 3))
+    fields = [{"name": name, "offset": 4 * i, "datatype": FLOAT32, "count": 1} for i, name in enumerate("xyz")]
+    return {"header": header(t, frame_id), "height": 1, "width": len(xyz), "fields": fields, "is_bigendian": False,
+            "point_step": 12, "row_step": 12 * len(xyz), "data": xyz.tobytes(), "is_dense": True}
 
 
 def roll_colour(roll: float, max_roll: float) -> dict[str, float]:
@@ -261,6 +278,20 @@ def write_schedule_mcap(path: str | Path, plan: Mapping[str, Any], schedule: Map
                                                     "position": [float(series[k][i]) for k in angles]}, t0 + t)
             out.write("/vpip/pose", POSE_STAMPED,
                       pose_stamped(t0 + t, series["x"][i], series["y"][i], series["yaw"][i]), t0 + t)
+
+
+def write_perception_mcap(path: str | Path, scan: Mapping[str, Any], t0: float | None = None) -> None:
+    """A ``sphereplan perceive`` result as MCAP: the kept obstacle points (``/perception/obstacles``,
+    ``sensor_msgs/PointCloud2`` in ``map``), the sensor origin the rays start from (``/perception/origin``,
+    ``geometry_msgs/PointStamped``) and the sphere's pose (``/perception/pose``, PoseStamped), all at ``t0``."""
+    t0 = time.time() if t0 is None else t0
+    ox, oy, oz = (float(v) for v in scan["origin_map"])
+    p = scan["pose"]
+    with McapOut(path) as out:
+        out.write(POINTS_TOPIC, POINT_CLOUD2, point_cloud2_msg(np.asarray(scan["points_map"], float), t0), t0)
+        out.write(SENSOR_ORIGIN_TOPIC, POINT_STAMPED,
+                  {"header": header(t0), "point": {"x": ox, "y": oy, "z": oz}}, t0)
+        out.write(ROBOT_POSE_TOPIC, POSE_STAMPED, pose_stamped(t0, p["x"], p["y"], p["yaw"]), t0)
 
 
 # --------------------------------------------------------------------------------------------- reading

@@ -325,6 +325,31 @@ class TensegrityStaticRequest(_Strict):
     robot: Name = "texplor"
 
 
+#: longest base64 text of one image ``/v1/perceive`` accepts (characters); the HTTP body limit caps it too
+MAX_IMAGE_BASE64 = 8_000_000
+
+
+class PerceiveRequest(_Strict):
+    """``POST /v1/perceive``: one stereo pair → obstacle points in the map frame (as ``sphereplan perceive``;
+    paper 001 §3.2). Images are base64 of image files (PNG, JPEG, ...); camera infos are the camera_info YAML
+    documents (``image_width``, ``camera_matrix``, ``projection_matrix``, ...) as JSON objects. ``roll`` is the
+    sphere's (> 0 leans left), ``pitch`` the main axis's (REP-103); radians unless ``degrees``."""
+
+    left_image: str = Field(min_length=1, max_length=MAX_IMAGE_BASE64, description="base64 of the left image file")
+    right_image: str = Field(min_length=1, max_length=MAX_IMAGE_BASE64, description="base64 of the right image file")
+    left_info: dict[str, Any] = Field(description="the left camera_info document")
+    right_info: dict[str, Any] = Field(description="the right camera_info document (P[0,3] = −fx·baseline)")
+    pose: PoseIn
+    roll: Angle = 0.0
+    pitch: Angle = 0.0
+    degrees: bool = False
+    robot: Name | None = Field(default=None, description="built-in profile; its radius is the axis height")
+    min_height_m: float = Field(default=0.05, ge=0.0, le=10.0)
+    max_height_m: float | None = Field(default=None, gt=0.0, le=100.0)
+    max_range_m: float = Field(default=10.0, gt=0.0, le=1000.0)
+    min_blob_px: int = Field(default=20, ge=1, le=1_000_000)
+
+
 Pair = Annotated[list[Metres], Field(min_length=2, max_length=2)]
 AnglePair = Annotated[list[Angle], Field(min_length=2, max_length=2)]
 

@@ -28,7 +28,7 @@ from numba import njit
 from planner.occupancy import OccupancyGrid
 from planner.robot import RobotProfile
 
-DEFAULT_REACH_M = 1.0  # clearances are capped here (the plan's reported clearance is capped at 1 m too)
+DEFAULT_REACH_M = 2.0  # clearances are capped here, as the plan's reported clearance is (a test holds them equal)
 
 
 @njit(cache=True)

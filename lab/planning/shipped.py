@@ -1,8 +1,10 @@
 """Benchmark of the spherical Hybrid A* against OMPL's BIT* and RRT* on the shipped problem sets.
 
-The OMPL planners get a Dubins state space with the robot's minimum turning radius and the very same
-three-circle validity check (:class:`planner.maps.clearance.ClearanceMap`), so the comparison is about the
-search, not the collision model. BIT* given ``ompl_time_s`` (10 s by default) is the length reference.
+The OMPL planners get a Dubins state space with the robot's minimum turning radius and the covering-circle
+validity check of :class:`planner.maps.clearance.ClearanceMap` (``CircleFootprint.for_robot``: for the
+near-disc sphere footprints that is one circle, 0.381 m for zju-60, which covers the padded polygon), while
+sphereplan checks the exact polygon; the circle is the more conservative of the two, so OMPL is never given an
+easier collision model. BIT* given ``ompl_time_s`` (10 s by default) is the length reference.
 """
 
 from __future__ import annotations

@@ -1,42 +1,52 @@
 """VPIP for rod-driven spheres (paper 000): rod driver (eq. 4–18), angle controllers, curvature cascade.
 
-Public surface: the report functions the CLI and services call, plus the building blocks.
+Public surface: the report functions the CLI and services call, plus the building blocks. Names are
+imported on first use (as in :mod:`planner`), so ``import planner.vpip.choices`` — what the command line's
+``--help`` needs — loads neither numpy nor MuJoCo.
 """
 
-from planner.vpip.api import (
-    calibrate_report,
-    parse_runs_csv,
-    profile_toml,
-    radius_report,
-    rods_report,
-    roll_report,
-    schedule_report,
-)
-from planner.vpip.cascade import PathReference, SurrogatePlant, rod_params, run_schedule
-from planner.vpip.controllers import PID, PIDGains, PitchController, RollController
-from planner.vpip.rods import RodCommand, RodDriver, RodParams, equivalent_plane, rod_lengths
-from planner.vpip.simple import SimpleDriver
+from __future__ import annotations
 
-__all__ = [
-    "PID",
-    "PIDGains",
-    "PathReference",
-    "PitchController",
-    "RodCommand",
-    "RodDriver",
-    "RodParams",
-    "RollController",
-    "SimpleDriver",
-    "SurrogatePlant",
-    "calibrate_report",
-    "equivalent_plane",
-    "parse_runs_csv",
-    "profile_toml",
-    "radius_report",
-    "rod_lengths",
-    "rod_params",
-    "rods_report",
-    "roll_report",
-    "run_schedule",
-    "schedule_report",
-]
+import importlib
+from typing import Any
+
+#: public name → the module that defines it
+_EXPORTS: dict[str, str] = {
+    "calibrate_report": "planner.vpip.api",
+    "parse_runs_csv": "planner.vpip.api",
+    "profile_toml": "planner.vpip.api",
+    "radius_report": "planner.vpip.api",
+    "rods_report": "planner.vpip.api",
+    "roll_report": "planner.vpip.api",
+    "schedule_report": "planner.vpip.api",
+    "PathReference": "planner.vpip.cascade",
+    "SurrogatePlant": "planner.vpip.cascade",
+    "rod_params": "planner.vpip.cascade",
+    "run_schedule": "planner.vpip.cascade",
+    "PID": "planner.vpip.controllers",
+    "PIDGains": "planner.vpip.controllers",
+    "PitchController": "planner.vpip.controllers",
+    "RollController": "planner.vpip.controllers",
+    "RodCommand": "planner.vpip.rods",
+    "RodDriver": "planner.vpip.rods",
+    "RodParams": "planner.vpip.rods",
+    "equivalent_plane": "planner.vpip.rods",
+    "rod_lengths": "planner.vpip.rods",
+    "with_settings": "planner.vpip.settings",
+    "SimpleDriver": "planner.vpip.simple",
+}
+
+__all__ = sorted(_EXPORTS)
+
+
+def __getattr__(name: str) -> Any:
+    module = _EXPORTS.get(name)
+    if module is None:
+        raise AttributeError(f"module 'planner.vpip' has no attribute {name!r}")
+    value = getattr(importlib.import_module(module), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(__all__))

@@ -20,6 +20,7 @@ from planner.termination import Termination
 from planner.vpip.cascade import rod_params, run_schedule
 from planner.vpip.circle import run_circle
 from planner.vpip.rods import rod_lengths
+from planner.vpip.settings import setting_names, with_settings
 
 
 def _finite(name: str, value: float) -> float:
@@ -245,17 +246,22 @@ def circle_report(
     omega_rad_s: float = 1.0,
     theta_vpip_rad: float | None = None,
     heading_rad: float = 0.0,
+    contact: str | None = None,
+    gains: str | None = None,
 ) -> dict[str, Any]:
     """Hold a roll and fit the circle rolled (``sphereplan vpip circle``; the full time series).
 
-    ``heading_rad`` is the start heading (repeat runs: docs/vpip.md, "Held-roll circles")."""
+    ``heading_rad`` is the start heading (repeat runs: docs/vpip.md, "Held-roll circles"); ``contact`` and
+    ``gains`` name the profile's contact setting and gain set (None: the profile's own)."""
     profile = robot if isinstance(robot, RobotProfile) else load_robot(robot)
     roll = _finite("roll", roll_rad)
     duration = _finite("duration", duration_s)
     omega = _finite("omega", omega_rad_s)
     theta = None if theta_vpip_rad is None else _finite("theta_vpip", theta_vpip_rad)
     heading = _finite("heading", heading_rad)
-    return run_circle(profile, roll, duration, plant, driver, omega, theta, heading_rad=heading)
+    return run_circle(
+        profile, roll, duration, plant, driver, omega, theta, heading_rad=heading, contact=contact, gains=gains
+    )
 
 
 def calibrate_by_simulation(
@@ -264,13 +270,19 @@ def calibrate_by_simulation(
     plant: str = "mujoco",
     duration_s: float = 30.0,
     driver: str = "vpip",
+    contact: str | None = None,
+    gains: str | None = None,
 ) -> dict[str, Any]:
-    """Run one circle per roll on ``plant`` and fit the roll model from them (``calibrate --rolls``)."""
+    """Run one circle per roll on ``plant`` and fit the roll model from them (``calibrate --rolls``).
+
+    ``contact`` and ``gains`` pick the profile's contact setting and gain set for the runs; the result
+    names them (``contact``, ``gains``) beside the table, since the table is only true for that ground."""
     profile = robot if isinstance(robot, RobotProfile) else load_robot(robot)
     if not rolls_rad:
         raise InvalidInput("rolls", "give at least one roll")
-    runs = [circle_report(r, profile, plant, duration_s, driver)["summary"] for r in rolls_rad]
-    return {**calibrate_from_circles(runs, profile), "circles": runs}
+    run_profile = with_settings(profile, contact, gains)
+    runs = [circle_report(r, run_profile, plant, duration_s, driver)["summary"] for r in rolls_rad]
+    return {**calibrate_from_circles(runs, profile), **setting_names(run_profile), "circles": runs}
 
 
 def _toml_value(value: Any) -> str:
@@ -300,10 +312,19 @@ def profile_toml(profile: RobotProfile, roll_model: Mapping[str, Any]) -> str:
         "footprint_width_m": profile.footprint_width_m,
     }
     lines = [f"{k} = {_toml_value(v)}" for k, v in top.items()]
-    lines += ["", "[roll_model]"] + [f"{k} = {_toml_value(v)}" for k, v in roll_model.items()]
+    lines += _toml_table("roll_model", roll_model)
     for name, table in profile.extra.items():
-        lines += ["", f"[{name}]"] + [f"{k} = {_toml_value(v)}" for k, v in table.items()]
+        lines += _toml_table(name, table)
     return "\n".join(lines) + "\n"
+
+
+def _toml_table(name: str, table: Mapping[str, Any]) -> list[str]:
+    """``[name]`` with its values, then its sub-tables as ``[name.sub]`` (e.g. ``[vpip.contact_settings.paper]``)."""
+    lines = ["", f"[{name}]"] + [f"{k} = {_toml_value(v)}" for k, v in table.items() if not isinstance(v, Mapping)]
+    for key, value in table.items():
+        if isinstance(value, Mapping):
+            lines += _toml_table(f"{name}.{key}", value)
+    return lines
 
 
 def schedule_report(
@@ -311,11 +332,14 @@ def schedule_report(
     robot: str | RobotProfile | None = None,
     driver: str = "vpip",
     plant: str = "surrogate",
+    contact: str | None = None,
+    gains: str | None = None,
     termination: Termination | None = None,
 ) -> dict[str, Any]:
     """Run the cascade along a planner result (``sphereplan vpip schedule``; the full time series).
 
-    ``robot`` defaults to the plan's own ``robot.name``, then ``daedalus``; ``termination`` bounds the wall
+    ``robot`` defaults to the plan's own ``robot.name``, then ``daedalus``; ``contact`` and ``gains`` pick
+    the profile's contact setting and gain set (None: the profile's own); ``termination`` bounds the wall
     clock (and may cancel).
     """
     if robot is None:
@@ -326,4 +350,5 @@ def schedule_report(
             else "daedalus"
         )
     profile = robot if isinstance(robot, RobotProfile) else load_robot(robot)
-    return run_schedule(plan, profile, driver=driver, plant=plant, termination=termination)
+    return run_schedule(plan, profile, driver=driver, plant=plant, contact=contact, gains=gains,
+                        termination=termination)

@@ -50,16 +50,15 @@ from planner.kinematics import wrap
 from planner.result import state_column
 from planner.robot import RobotProfile
 from planner.termination import Termination
+from planner.vpip.choices import DRIVERS, PLANTS
 from planner.vpip.controllers import PitchController, RollController, gains_from_section
 from planner.vpip.mujoco_plant import MujocoPlant, Observation
 from planner.vpip.rods import RodDriver, RodParams, equivalent_plane
+from planner.vpip.settings import setting_names, with_settings
 from planner.vpip.simple import SimpleDriver
 
-#: control steps between two looks at the wall clock (termination)
+#: control ticks between two looks at the wall clock (termination)
 CHECK_EVERY = 20
-
-DRIVERS = ("vpip", "simple")
-PLANTS = ("surrogate", "mujoco")
 
 SURROGATE_NOTE = (
     "surrogate plant, not the rod/contact physics: rotational speed follows theta_vpip through a "
@@ -326,6 +325,8 @@ def run_schedule(
     tracking: TrackingGains | None = None,
     max_duration_s: float | None = None,
     plant: str = "surrogate",
+    contact: str | None = None,
+    gains: str | None = None,
     termination: Termination | None = None,
 ) -> dict[str, Any]:
     """Run the cascade along ``plan`` and return the time series (JSON-ready, SI units, radians).
@@ -336,164 +337,203 @@ def run_schedule(
     lengths after the rod-speed limit); with ``plant="mujoco"`` also ``rod_measured_m`` (the slide
     joints' positions) and ``rods_on_ground`` (how many rod tips touch the floor). Stops when the end of
     the path is reached or after ``max_duration_s`` (default: 1.5 × the plan's duration + 10 s; on the
-    MuJoCo plant 3 × + 20 s, since it rolls slower than the plan's timing).
+    MuJoCo plant 3 × + 20 s, room for a sphere that falls behind the plan's timing). ``contact`` and
+    ``gains`` pick the profile's contact setting and gain set (:func:`~planner.vpip.settings.with_settings`).
     """
     if driver not in DRIVERS:
         raise InvalidInput("driver", f"must be one of {', '.join(DRIVERS)}, got {driver!r}")
     if plant not in PLANTS:
         raise InvalidInput("plant", f"must be one of {', '.join(PLANTS)}, got {plant!r}")
-    tracking = tracking or TrackingGains()
-    params = rod_params(profile)
-    roll_gains, pitch_gains, rate_hz = gains_from_section(vpip_section(profile))
-    ref = PathReference.from_plan(plan, profile)
-    dt = 1.0 / rate_hz
-    t_end = float(ref.t[-1] - ref.t[0])
-    # the MuJoCo sphere rolls at ~0.6 of the plan's ω = 1 rad/s (docs/vpip.md): give it the time
+    profile = with_settings(profile, contact, gains)
+    cascade = _Cascade(plan, profile, driver, tracking or TrackingGains(), plant)
+    t_end = float(cascade.ref.t[-1] - cascade.ref.t[0])
     default_limit = 3.0 * t_end + 20.0 if plant == "mujoco" else 1.5 * t_end + 10.0
-    limit_s = max_duration_s if max_duration_s is not None else default_limit
-    model = profile.roll_model
-    max_k = profile.max_curvature
-    max_roll = profile.max_roll_rad
-    max_omega = profile.max_speed_m_s / params.r_m
-    roll0 = float(model.roll_for_curvature(ref.curvature[0]))
-    roll0 = max(-max_roll, min(max_roll, roll0))
-
-    roll_ctl = RollController(roll_gains, dt)
-    pitch_ctl = PitchController(pitch_gains, dt)
-    vpip = RodDriver(params, dt)
-    simple = SimpleDriver(params, dt)
-    sphere = make_plant(plant, profile, params, float(ref.x[0]), float(ref.y[0]), float(ref.yaw[0]), roll0)
-    obs = sphere.observe()
-    roll_des = obs.roll_rad if plant == "mujoco" else roll0
-    s_sim = float(ref.s[0])
-    s_goal = float(ref.s[-1])
-    keys = [
-        "t",
-        "roll_desired_rad",
-        "roll_rad",
-        "omega_desired_rad_s",
-        "omega_rad_s",
-        "phi_vpip_rad",
-        "theta_vpip_rad",
-        "pitch_phase_rad",
-        "curvature_cmd",
-        "x",
-        "y",
-        "yaw",
-        "s",
-        "lateral_error_m",
-        "rod_length_m",
-    ]
-    if plant == "mujoco":
-        keys += ["rod_measured_m", "rods_on_ground"]
-    rec: dict[str, list[Any]] = {k: [] for k in keys}
-    max_lat = 0.0
-    reached = False
-    steps = math.ceil(limit_s / dt)
-    clock = termination.start() if termination is not None else None
-    for k in range(steps + 1):
-        if clock is not None and k % CHECK_EVERY == 0:
-            clock.check("the VPIP schedule")
-        t = k * dt
-        t_plan = ref.t[0] + t
-        roll, omega, phase = obs.roll_rad, obs.omega_rad_s, obs.phase_rad
-        x, y, yaw = obs.x, obs.y, obs.yaw
-        # 1. desired curvature → desired roll (profile roll model), rate-limited
-        v_plan = ref.v_at_t(t_plan)
-        xr, yr, yawr = ref.pose_at(s_sim)
-        e_lat = -(x - xr) * math.sin(yawr) + (y - yr) * math.cos(yawr)
-        max_lat = max(max_lat, abs(e_lat))
-        k_ff = ref.curvature_at(s_sim + max(v_plan, 0.05) * tracking.lookahead_s)
-        k_cmd = k_ff + tracking.k_heading_per_m * wrap(yawr - yaw) - tracking.k_lateral_per_m2 * e_lat
-        k_cmd = max(-max_k, min(max_k, k_cmd))
-        target_roll = max(-max_roll, min(max_roll, float(model.roll_for_curvature(k_cmd))))
-        step_roll = profile.max_roll_rate_rad_s * dt
-        roll_des += max(-step_roll, min(step_roll, target_roll - roll_des))
-        # 2. desired speed from the plan's timing
-        v_des = v_plan + tracking.k_progress_per_s * (ref.s_at_t(t_plan) - s_sim)
-        omega_des = max(0.0, min(max_omega, v_des / params.r_m))
-        if s_sim >= s_goal:
-            omega_des = 0.0
-        # 3.–4. controllers and rods
-        if driver == "vpip":
-            phi_v = roll_ctl.command(roll, roll_des)
-            theta_v = pitch_ctl.command(omega, omega_des)
-            vpip.step(phi_v, theta_v, roll, phase)
-            lengths = vpip.lengths_m
-        else:
-            targets = simple.step(roll, roll_des, phase).length_m
-            lengths = simple.lengths_m
-            phi_v, theta_v = equivalent_plane(
-                params, targets, roll, phase, (roll_gains.output_limit, pitch_gains.output_limit)
-            )
-        for key, value in (
-            ("t", t),
-            ("roll_desired_rad", roll_des),
-            ("roll_rad", roll),
-            ("omega_desired_rad_s", omega_des),
-            ("omega_rad_s", omega),
-            ("phi_vpip_rad", phi_v),
-            ("theta_vpip_rad", theta_v),
-            ("pitch_phase_rad", phase),
-            ("curvature_cmd", k_cmd),
-            ("x", x),
-            ("y", y),
-            ("yaw", yaw),
-            ("s", s_sim),
-            ("lateral_error_m", e_lat),
-        ):
-            rec[key].append(float(value))
-        rec["rod_length_m"].append([float(v) for v in lengths])
-        if isinstance(sphere, MujocoSphere):
-            rec["rod_measured_m"].append([float(v) for v in sphere.sim.rod_lengths_m()])
-            rec["rods_on_ground"].append(int(sphere.sim.rods_on_ground().sum()))
-        if s_sim >= s_goal:
-            reached = True
-            break
-        sphere.step(phi_v, theta_v, lengths, dt)
-        obs = sphere.observe()
-        if isinstance(sphere, MujocoSphere):
-            # progress along the path: the centre's displacement along the path tangent
-            ds = (obs.x - x) * math.cos(yawr) + (obs.y - y) * math.sin(yawr)
-            s_sim += max(ds, 0.0)
-        else:
-            s_sim += max(omega * profile.radius_m, 0.0) * dt
-
-    lengths_arr = np.asarray(rec["rod_length_m"])
-    rod_rate = float(np.max(np.abs(np.diff(lengths_arr, axis=0))) / dt) if len(lengths_arr) > 1 else 0.0
-    roll_err = np.asarray(rec["roll_rad"]) - np.asarray(rec["roll_desired_rad"])
-    gx, gy, _ = ref.pose_at(s_goal)
-    lat = np.asarray(rec["lateral_error_m"])
-    summary = {
-        "plant": plant,
-        "reached_end": reached,
-        "duration_s": rec["t"][-1],
-        "plan_duration_s": t_end,
-        "ticks": len(rec["t"]),
-        "path_length_m": ref.length_m,
-        "max_lateral_error_m": max_lat,
-        "rms_lateral_error_m": float(np.sqrt(np.mean(lat**2))),
-        "final_position_error_m": math.hypot(obs.x - gx, obs.y - gy),
-        "rms_roll_error_rad": float(np.sqrt(np.mean(roll_err**2))),
-        "max_rod_rate_m_s": rod_rate,
-        "max_abs_phi_vpip_rad": float(np.max(np.abs(rec["phi_vpip_rad"]))),
-        "max_abs_theta_vpip_rad": float(np.max(np.abs(rec["theta_vpip_rad"]))),
-    }
-    if isinstance(sphere, MujocoSphere):
-        summary["measured_rod_rate"] = rod_rate_stats(
-            np.asarray(rec["rod_measured_m"]), dt, params.rod_speed_m_s
-        )
-        summary["peak_rod_speed_m_s"] = sphere.sim.peak_rod_speed_m_s
-        summary["max_rod_length_m"] = float(np.max(rec["rod_measured_m"]))
-        summary["mean_rods_on_ground"] = float(np.mean(rec["rods_on_ground"]))
-    n = params.rods_per_side
+    cascade.run(max_duration_s if max_duration_s is not None else default_limit, termination)
+    n = cascade.params.rods_per_side
     return {
         "driver": driver,
         "robot": profile.name,
-        "rate_hz": rate_hz,
-        "plant": plant_json(sphere),
-        "params": params.to_json(),
+        "rate_hz": cascade.rate_hz,
+        "plant": plant_json(cascade.sphere),
+        "params": cascade.params.to_json(),
         "rods": [{"index": i, "side": "left" if i < n else "right"} for i in range(2 * n)],
-        "summary": summary,
-        "series": rec,
+        "summary": cascade.summary(),
+        "series": cascade.rec,
     }
+
+
+_SCHEDULE_KEYS = (
+    "t",
+    "roll_desired_rad",
+    "roll_rad",
+    "omega_desired_rad_s",
+    "omega_rad_s",
+    "phi_vpip_rad",
+    "theta_vpip_rad",
+    "pitch_phase_rad",
+    "curvature_cmd",
+    "x",
+    "y",
+    "yaw",
+    "s",
+    "lateral_error_m",
+)
+"""The scalar series of a schedule, in the order they are recorded."""
+
+
+class _Cascade:
+    """One run of the module's cascade along a plan: set-up here, :meth:`run` the loop, :meth:`summary`."""
+
+    def __init__(
+        self, plan: Mapping[str, Any], profile: RobotProfile, driver: str, tracking: TrackingGains, plant: str
+    ) -> None:
+        self.profile = profile
+        self.driver = driver
+        self.tracking = tracking
+        self.plant = plant
+        self.params = params = rod_params(profile)
+        self.roll_gains, self.pitch_gains, self.rate_hz = gains_from_section(vpip_section(profile))
+        self.ref = ref = PathReference.from_plan(plan, profile)
+        self.dt = dt = 1.0 / self.rate_hz
+        self.t_end = float(ref.t[-1] - ref.t[0])
+        model = profile.roll_model
+        self.max_k = profile.max_curvature
+        self.max_roll = profile.max_roll_rad
+        self.max_omega = profile.max_speed_m_s / params.r_m
+        roll0 = float(model.roll_for_curvature(ref.curvature[0]))
+        roll0 = max(-self.max_roll, min(self.max_roll, roll0))
+        self.roll_ctl = RollController(self.roll_gains, dt)
+        self.pitch_ctl = PitchController(self.pitch_gains, dt)
+        self.vpip = RodDriver(params, dt)
+        self.simple = SimpleDriver(params, dt)
+        self.sphere = make_plant(plant, profile, params, float(ref.x[0]), float(ref.y[0]), float(ref.yaw[0]), roll0)
+        self.obs = self.sphere.observe()
+        self.roll_des = self.obs.roll_rad if plant == "mujoco" else roll0
+        self.s_sim = float(ref.s[0])
+        self.s_goal = float(ref.s[-1])
+        keys = [*_SCHEDULE_KEYS, "rod_length_m"]
+        if plant == "mujoco":
+            keys += ["rod_measured_m", "rods_on_ground"]
+        self.rec: dict[str, list[Any]] = {k: [] for k in keys}
+        self.max_lat = 0.0
+        self.reached = False
+
+    def run(self, limit_s: float, termination: Termination | None = None) -> None:
+        """Tick at the control rate until the end of the path is reached or ``limit_s`` (simulated) has passed;
+        ``termination`` bounds the wall clock."""
+        steps = math.ceil(limit_s / self.dt)
+        clock = termination.start() if termination is not None else None
+        for k in range(steps + 1):
+            if clock is not None and k % CHECK_EVERY == 0:
+                clock.check("the VPIP schedule")
+            t = k * self.dt
+            obs = self.obs
+            yawr, e_lat, k_cmd = self._desired_roll(obs, t)
+            omega_des = self._desired_omega(t)
+            phi_v, theta_v, lengths = self._rods(obs, omega_des)
+            values = (
+                t,
+                self.roll_des,
+                obs.roll_rad,
+                omega_des,
+                obs.omega_rad_s,
+                phi_v,
+                theta_v,
+                obs.phase_rad,
+                k_cmd,
+                obs.x,
+                obs.y,
+                obs.yaw,
+                self.s_sim,
+                e_lat,
+            )
+            for key, value in zip(_SCHEDULE_KEYS, values, strict=True):
+                self.rec[key].append(float(value))
+            self.rec["rod_length_m"].append([float(v) for v in lengths])
+            if isinstance(self.sphere, MujocoSphere):
+                self.rec["rod_measured_m"].append([float(v) for v in self.sphere.sim.rod_lengths_m()])
+                self.rec["rods_on_ground"].append(int(self.sphere.sim.rods_on_ground().sum()))
+            if self.s_sim >= self.s_goal:
+                self.reached = True
+                break
+            self.sphere.step(phi_v, theta_v, lengths, self.dt)
+            self.obs = self.sphere.observe()
+            self._advance_along_path(obs, yawr)
+
+    def _desired_roll(self, obs: Observation, t: float) -> tuple[float, float, float]:
+        """Step 1: path curvature (+ tracking correction) → desired roll, rate-limited; (ψ_ref, e_lat, κ_cmd)."""
+        ref, tracking = self.ref, self.tracking
+        v_plan = ref.v_at_t(ref.t[0] + t)
+        xr, yr, yawr = ref.pose_at(self.s_sim)
+        e_lat = -(obs.x - xr) * math.sin(yawr) + (obs.y - yr) * math.cos(yawr)
+        self.max_lat = max(self.max_lat, abs(e_lat))
+        k_ff = ref.curvature_at(self.s_sim + max(v_plan, 0.05) * tracking.lookahead_s)
+        k_cmd = k_ff + tracking.k_heading_per_m * wrap(yawr - obs.yaw) - tracking.k_lateral_per_m2 * e_lat
+        k_cmd = max(-self.max_k, min(self.max_k, k_cmd))
+        target_roll = max(-self.max_roll, min(self.max_roll, float(self.profile.roll_model.roll_for_curvature(k_cmd))))
+        step_roll = self.profile.max_roll_rate_rad_s * self.dt
+        self.roll_des += max(-step_roll, min(step_roll, target_roll - self.roll_des))
+        return yawr, e_lat, k_cmd
+
+    def _desired_omega(self, t: float) -> float:
+        """Step 2: the plan's timing (+ progress correction) → desired rolling rate ω."""
+        ref = self.ref
+        t_plan = ref.t[0] + t
+        v_des = ref.v_at_t(t_plan) + self.tracking.k_progress_per_s * (ref.s_at_t(t_plan) - self.s_sim)
+        omega_des = max(0.0, min(self.max_omega, v_des / self.params.r_m))
+        return 0.0 if self.s_sim >= self.s_goal else omega_des
+
+    def _rods(self, obs: Observation, omega_des: float) -> tuple[float, float, np.ndarray]:
+        """Steps 3–4: controllers → plane angles → rod lengths (or the simple driver and its equivalent plane)."""
+        if self.driver == "vpip":
+            phi_v = self.roll_ctl.command(obs.roll_rad, self.roll_des)
+            theta_v = self.pitch_ctl.command(obs.omega_rad_s, omega_des)
+            self.vpip.step(phi_v, theta_v, obs.roll_rad, obs.phase_rad)
+            return phi_v, theta_v, self.vpip.lengths_m
+        targets = self.simple.step(obs.roll_rad, self.roll_des, obs.phase_rad).length_m
+        phi_v, theta_v = equivalent_plane(
+            self.params,
+            targets,
+            obs.roll_rad,
+            obs.phase_rad,
+            (self.roll_gains.output_limit, self.pitch_gains.output_limit),
+        )
+        return phi_v, theta_v, self.simple.lengths_m
+
+    def _advance_along_path(self, before: Observation, yawr: float) -> None:
+        """Progress along the path: the MuJoCo centre's displacement along the tangent, or the surrogate's r·ω."""
+        if isinstance(self.sphere, MujocoSphere):
+            ds = (self.obs.x - before.x) * math.cos(yawr) + (self.obs.y - before.y) * math.sin(yawr)
+            self.s_sim += max(ds, 0.0)
+        else:
+            self.s_sim += max(before.omega_rad_s * self.profile.radius_m, 0.0) * self.dt
+
+    def summary(self) -> dict[str, Any]:
+        rec, dt, params = self.rec, self.dt, self.params
+        lengths_arr = np.asarray(rec["rod_length_m"])
+        rod_rate = float(np.max(np.abs(np.diff(lengths_arr, axis=0))) / dt) if len(lengths_arr) > 1 else 0.0
+        roll_err = np.asarray(rec["roll_rad"]) - np.asarray(rec["roll_desired_rad"])
+        gx, gy, _ = self.ref.pose_at(self.s_goal)
+        lat = np.asarray(rec["lateral_error_m"])
+        summary: dict[str, Any] = {
+            "plant": self.plant,
+            **setting_names(self.profile),
+            "reached_end": self.reached,
+            "duration_s": rec["t"][-1],
+            "plan_duration_s": self.t_end,
+            "ticks": len(rec["t"]),
+            "path_length_m": self.ref.length_m,
+            "max_lateral_error_m": self.max_lat,
+            "rms_lateral_error_m": float(np.sqrt(np.mean(lat**2))),
+            "final_position_error_m": math.hypot(self.obs.x - gx, self.obs.y - gy),
+            "rms_roll_error_rad": float(np.sqrt(np.mean(roll_err**2))),
+            "max_rod_rate_m_s": rod_rate,
+            "max_abs_phi_vpip_rad": float(np.max(np.abs(rec["phi_vpip_rad"]))),
+            "max_abs_theta_vpip_rad": float(np.max(np.abs(rec["theta_vpip_rad"]))),
+        }
+        if isinstance(self.sphere, MujocoSphere):
+            summary["measured_rod_rate"] = rod_rate_stats(np.asarray(rec["rod_measured_m"]), dt, params.rod_speed_m_s)
+            summary["peak_rod_speed_m_s"] = self.sphere.sim.peak_rod_speed_m_s
+            summary["max_rod_length_m"] = float(np.max(rec["rod_measured_m"]))
+            summary["mean_rods_on_ground"] = float(np.mean(rec["rods_on_ground"]))
+        return summary

@@ -23,17 +23,19 @@ import numpy as np
 from planner.errors import InvalidInput
 from planner.robot import RobotProfile
 from planner.vpip.cascade import (
-    DRIVERS,
-    PLANTS,
     MujocoSphere,
+    SurrogateSphere,
     make_plant,
     plant_json,
     rod_params,
     rod_rate_stats,
     vpip_section,
 )
-from planner.vpip.controllers import PitchController, RollController, gains_from_section
-from planner.vpip.rods import RodDriver
+from planner.vpip.choices import DRIVERS, PLANTS
+from planner.vpip.controllers import PIDGains, PitchController, RollController, gains_from_section
+from planner.vpip.mujoco_plant import Observation
+from planner.vpip.rods import RodDriver, RodParams
+from planner.vpip.settings import setting_names, with_settings
 from planner.vpip.simple import SimpleDriver
 
 log = logging.getLogger(__name__)
@@ -67,6 +69,8 @@ def run_circle(
     theta_vpip_rad: float | None = None,
     settle_s: float | None = None,
     heading_rad: float = 0.0,
+    contact: str | None = None,
+    gains: str | None = None,
 ) -> dict[str, Any]:
     """Hold a desired roll (and ω, or a fixed θ_VPIP) for ``duration_s`` and fit the circle rolled.
 
@@ -75,15 +79,79 @@ def run_circle(
     yaw, rod lengths commanded and measured). ``diameter_m`` is null when the track turned less than
     45° (too little arc to fit a circle; a straight run). ``heading_rad`` is the start heading: on a flat
     floor it changes nothing physical, only the rounding, so repeating a MuJoCo run at several headings
-    shows how much of a diameter is the run's chaotic detail (docs/vpip.md).
+    shows how much of a diameter is the run's chaotic detail (docs/vpip.md). ``contact`` and ``gains``
+    pick the profile's contact setting and controller gain set (:func:`~planner.vpip.settings.with_settings`;
+    None: the profile's own); the summary names both.
 
-    On the MuJoCo plant the summary also splits the turning into its kinematic parts (the sphere's world
-    angular velocity Ω): ``mean_spin_rad_s`` (Ω_z, spin about the contact normal, > 0 turns left),
+    Every run splits its turning into spin and lean (docs/vpip.md "The turn explained"):
+    ``mean_spin_rad_s`` (Ω_z, the spin about the contact normal, > 0 turns left),
     ``mean_no_spin_yaw_rate_rad_s`` (ω_h·tan(roll), ω_h the rolling rate about the axle's horizontal
-    direction: the heading rate without spin), so that yaw rate = spin + ω_h·tan(roll) exactly;
-    ``mean_yaw_rate_rad_s`` (the heading rate measured) and ``no_spin_diameter_m`` = 2·r_m / tan(mean
-    roll), the circle a non-spinning sphere rolls at the roll it actually held.
+    direction: the heading rate without spin), so that yaw rate = spin + ω_h·tan(roll);
+    ``mean_yaw_rate_rad_s`` (the heading rate measured), ``no_spin_diameter_m`` = 2·r_m / tan(held roll),
+    the circle a non-spinning sphere rolls at the roll it actually held, and ``spin_lean_diameter_m`` =
+    2·r_m / (tan(held roll) + Ω_z/ω_h), the circle the split predicts. On the MuJoCo plant the split is
+    measured on the simulated body; on the surrogate the spin is what its roll table implies
+    (``spin_source`` says which).
     """
+    profile = with_settings(profile, contact, gains)
+    _check_circle_inputs(profile, roll_rad, duration_s, plant, driver, omega_rad_s, heading_rad)
+    params = rod_params(profile)
+    roll_gains, pitch_gains, rate_hz = gains_from_section(vpip_section(profile))
+    if theta_vpip_rad is not None and not (
+        math.isfinite(theta_vpip_rad) and abs(theta_vpip_rad) <= pitch_gains.output_limit + 1e-12
+    ):
+        raise InvalidInput(
+            "theta_vpip", f"must be within ±{math.degrees(pitch_gains.output_limit):.3g} deg, got {theta_vpip_rad!r}"
+        )
+    settle = min(5.0, 0.25 * duration_s) if settle_s is None else settle_s
+    dt = 1.0 / rate_hz
+    sphere = make_plant(plant, profile, params, 0.0, 0.0, heading_rad, roll_rad if plant == "surrogate" else 0.0)
+    loop = _HeldRollLoop(sphere, params, roll_gains, pitch_gains, dt, driver)
+    loop.run(roll_rad, omega_rad_s, theta_vpip_rad, duration_s, settle)
+    summary = _summary(loop.rec, dt, settle, params.rod_speed_m_s)
+    summary.update(
+        {
+            "plant": plant,
+            "driver": driver,
+            **setting_names(profile),
+            "roll_desired_deg": math.degrees(roll_rad),
+            "omega_desired_rad_s": omega_rad_s if theta_vpip_rad is None else None,
+            "theta_vpip_fixed_deg": None if theta_vpip_rad is None else math.degrees(theta_vpip_rad),
+            "duration_s": duration_s,
+            "settle_s": settle,
+            "start_heading_rad": heading_rad,
+            "commanded_rod_rate": rod_rate_stats(np.asarray(loop.rec["rod_length_m"]), dt, params.rod_speed_m_s),
+        }
+    )
+    summary.update(_plant_summary(loop, dt, settle, params))
+    summary.update(_turn_split(loop.rec, settle, params.r_m, summary["mean_roll_deg"], summary["mean_yaw_rate_rad_s"]))
+    if loop.roll_sat:
+        summary.update(_roll_pid_summary(loop, roll_gains.integral_limit, int(settle / dt)))
+    paper = PAPER_DIAMETERS_M.get(round(abs(math.degrees(roll_rad)), 6))
+    summary["paper_diameter_m"] = paper
+    if paper is not None and summary["diameter_m"] is not None:
+        summary["relative_to_paper"] = summary["diameter_m"] / paper - 1.0
+    log.info("circle %s/%s roll %.1f deg: %s", plant, driver, math.degrees(roll_rad), summary["diameter_m"])
+    return {
+        "robot": profile.name,
+        "rate_hz": rate_hz,
+        "plant": plant_json(sphere),
+        "params": params.to_json(),
+        "summary": summary,
+        "series": loop.rec,
+    }
+
+
+def _check_circle_inputs(
+    profile: RobotProfile,
+    roll_rad: float,
+    duration_s: float,
+    plant: str,
+    driver: str,
+    omega_rad_s: float,
+    heading_rad: float,
+) -> None:
+    """Refuse a circle request naming the bad field (:class:`~planner.errors.InvalidInput`)."""
     if driver not in DRIVERS:
         raise InvalidInput("driver", f"must be one of {', '.join(DRIVERS)}, got {driver!r}")
     if plant not in PLANTS:
@@ -101,49 +169,73 @@ def run_circle(
         raise InvalidInput("duration", f"must be in (0, 600] s, got {duration_s}")
     if not 0 < omega_rad_s <= 5:
         raise InvalidInput("omega", f"must be in (0, 5] rad/s, got {omega_rad_s}")
-    params = rod_params(profile)
-    roll_gains, pitch_gains, rate_hz = gains_from_section(vpip_section(profile))
-    if theta_vpip_rad is not None and not (
-        math.isfinite(theta_vpip_rad) and abs(theta_vpip_rad) <= pitch_gains.output_limit + 1e-12
-    ):
-        raise InvalidInput(
-            "theta_vpip", f"must be within ±{math.degrees(pitch_gains.output_limit):.3g} deg, got {theta_vpip_rad!r}"
-        )
-    settle = min(5.0, 0.25 * duration_s) if settle_s is None else settle_s
-    dt = 1.0 / rate_hz
-    sphere = make_plant(plant, profile, params, 0.0, 0.0, heading_rad, roll_rad if plant == "surrogate" else 0.0)
-    roll_ctl = RollController(roll_gains, dt)
-    pitch_ctl = PitchController(pitch_gains, dt)
-    vpip = RodDriver(params, dt)
-    simple = SimpleDriver(params, dt)
-    keys = ["t", "roll_rad", "omega_rad_s", "phi_vpip_rad", "theta_vpip_rad", "x", "y", "yaw", "rod_length_m"]
-    mujoco = isinstance(sphere, MujocoSphere)
-    if mujoco:
-        keys += ["rod_measured_m", "rods_on_ground", "spin_rad_s", "no_spin_yaw_rate_rad_s"]
-    rec: dict[str, list[Any]] = {k: [] for k in keys}
-    steps = round(duration_s / dt)
-    feet = _FootStats(params.rods_per_side)
-    roll_sat: list[bool] = []
-    roll_int: list[float] = []
-    roll_d: list[float] = []
-    for k in range(steps + 1):
-        obs = sphere.observe()
-        if driver == "vpip":
+
+
+class _HeldRollLoop:
+    """The 100 Hz loop of a circle run: controllers → rods → plant, recording every tick in :attr:`rec`."""
+
+    def __init__(
+        self,
+        sphere: SurrogateSphere | MujocoSphere,
+        params: RodParams,
+        roll_gains: PIDGains,
+        pitch_gains: PIDGains,
+        dt: float,
+        driver: str,
+    ) -> None:
+        self.sphere = sphere
+        self.params = params
+        self.dt = dt
+        self.driver = driver
+        self.roll_ctl = RollController(roll_gains, dt)
+        self.pitch_ctl = PitchController(pitch_gains, dt)
+        self.vpip = RodDriver(params, dt)
+        self.simple = SimpleDriver(params, dt)
+        keys = ["t", "roll_rad", "omega_rad_s", "phi_vpip_rad", "theta_vpip_rad", "x", "y", "yaw", "rod_length_m"]
+        if isinstance(sphere, MujocoSphere):
+            keys += ["rod_measured_m", "rods_on_ground", "spin_rad_s", "no_spin_yaw_rate_rad_s"]
+        self.rec: dict[str, list[Any]] = {k: [] for k in keys}
+        self.feet = _FootStats(params.rods_per_side)
+        self.roll_sat: list[bool] = []
+        self.roll_int: list[float] = []
+        self.roll_d: list[float] = []
+
+    def run(
+        self, roll_rad: float, omega_rad_s: float, theta_vpip_rad: float | None, duration_s: float, settle: float
+    ) -> None:
+        dt, sphere = self.dt, self.sphere
+        steps = round(duration_s / dt)
+        for k in range(steps + 1):
+            obs = sphere.observe()
+            phi_v, theta_v, lengths = self._command(obs, roll_rad, omega_rad_s, theta_vpip_rad)
+            self._record(k * dt, obs, phi_v, theta_v, lengths)
+            if isinstance(sphere, MujocoSphere) and k * dt >= settle:
+                self.feet.tick(sphere.sim, obs, roll_rad)
+            if k < steps:
+                sphere.step(phi_v, theta_v, lengths, dt)
+
+    def _command(
+        self, obs: Observation, roll_rad: float, omega_rad_s: float, theta_vpip_rad: float | None
+    ) -> tuple[float, float, np.ndarray]:
+        """This tick's plane angles (NaN for the simple driver) and rod lengths."""
+        if self.driver == "vpip":
+            roll_ctl = self.roll_ctl
             phi_v = roll_ctl.command(obs.roll_rad, roll_rad)
             theta_v = (
-                pitch_ctl.command(obs.omega_rad_s, omega_rad_s) if theta_vpip_rad is None else theta_vpip_rad
+                self.pitch_ctl.command(obs.omega_rad_s, omega_rad_s) if theta_vpip_rad is None else theta_vpip_rad
             )
-            vpip.step(phi_v, theta_v, obs.roll_rad, obs.phase_rad)
-            roll_sat.append(roll_ctl.saturated)
-            roll_int.append(roll_ctl.integral)
-            roll_d.append(roll_ctl.gains.kd * roll_ctl.derivative)
-            lengths = vpip.lengths_m
-        else:
-            simple.step(obs.roll_rad, roll_rad, obs.phase_rad)
-            lengths = simple.lengths_m
-            phi_v = theta_v = math.nan
+            self.vpip.step(phi_v, theta_v, obs.roll_rad, obs.phase_rad)
+            self.roll_sat.append(roll_ctl.saturated)
+            self.roll_int.append(roll_ctl.integral)
+            self.roll_d.append(roll_ctl.gains.kd * roll_ctl.derivative)
+            return phi_v, theta_v, self.vpip.lengths_m
+        self.simple.step(obs.roll_rad, roll_rad, obs.phase_rad)
+        return math.nan, math.nan, self.simple.lengths_m
+
+    def _record(self, t: float, obs: Observation, phi_v: float, theta_v: float, lengths: np.ndarray) -> None:
+        rec = self.rec
         for key, value in (
-            ("t", k * dt),
+            ("t", t),
             ("roll_rad", obs.roll_rad),
             ("omega_rad_s", obs.omega_rad_s),
             ("phi_vpip_rad", phi_v),
@@ -154,67 +246,73 @@ def run_circle(
         ):
             rec[key].append(float(value) if math.isfinite(value) else None)
         rec["rod_length_m"].append([float(v) for v in lengths])
-        if isinstance(sphere, MujocoSphere):
-            rec["rod_measured_m"].append([float(v) for v in sphere.sim.rod_lengths_m()])
-            rec["rods_on_ground"].append(int(sphere.sim.rods_on_ground().sum()))
-            w, tilt = sphere.sim.turn_rates()
+        if isinstance(self.sphere, MujocoSphere):
+            sim = self.sphere.sim
+            rec["rod_measured_m"].append([float(v) for v in sim.rod_lengths_m()])
+            rec["rods_on_ground"].append(int(sim.rods_on_ground().sum()))
+            w, tilt = sim.turn_rates()
             rec["spin_rad_s"].append(w)
             rec["no_spin_yaw_rate_rad_s"].append(tilt)
-            if k * dt >= settle:
-                feet.tick(sphere.sim, obs, roll_rad)
-        if k < steps:
-            sphere.step(phi_v, theta_v, lengths, dt)
-    summary = _summary(rec, dt, settle, params.rod_speed_m_s)
-    summary.update(
-        {
-            "plant": plant,
-            "driver": driver,
-            "roll_desired_deg": math.degrees(roll_rad),
-            "omega_desired_rad_s": omega_rad_s if theta_vpip_rad is None else None,
-            "theta_vpip_fixed_deg": None if theta_vpip_rad is None else math.degrees(theta_vpip_rad),
-            "duration_s": duration_s,
-            "settle_s": settle,
-            "start_heading_rad": heading_rad,
-            "commanded_rod_rate": rod_rate_stats(np.asarray(rec["rod_length_m"]), dt, params.rod_speed_m_s),
-        }
-    )
-    if isinstance(sphere, MujocoSphere):
-        measured = np.asarray(rec["rod_measured_m"])
-        summary["measured_rod_rate"] = rod_rate_stats(measured, dt, params.rod_speed_m_s)
-        summary["peak_rod_speed_m_s"] = sphere.sim.peak_rod_speed_m_s
-        summary["max_rod_length_m"] = float(measured.max())
-        summary["mean_rods_on_ground"] = float(np.mean(rec["rods_on_ground"]))
-        summary["diameter_source"] = "MuJoCo rigid-body contact physics"
-        summary["rod_feet"] = feet.summary()
-        late = np.asarray(rec["t"]) >= settle
-        summary["mean_spin_rad_s"] = float(np.mean(np.asarray(rec["spin_rad_s"])[late]))
-        summary["mean_no_spin_yaw_rate_rad_s"] = float(np.mean(np.asarray(rec["no_spin_yaw_rate_rad_s"])[late]))
-        held = math.radians(abs(summary["mean_roll_deg"]))
-        summary["no_spin_diameter_m"] = 2.0 * params.r_m / math.tan(held) if held > 1e-6 else None
-    else:
-        summary["diameter_source"] = "surrogate: the profile's roll model (table), not physics"
-    if roll_sat:
-        n_late = len(roll_sat) - int(settle / dt)
-        if n_late > 0:
-            late_int = np.abs(roll_int[-n_late:])
-            summary["roll_pid"] = {
-                "output_saturated_fraction": float(np.mean(roll_sat[-n_late:])),
-                "integral_at_limit_fraction": float(np.mean(late_int >= roll_gains.integral_limit * (1 - 1e-9))),
-                "mean_integral_deg": math.degrees(float(np.mean(roll_int[-n_late:]))),
-                "rms_derivative_part_deg": math.degrees(float(np.sqrt(np.mean(np.square(roll_d[-n_late:]))))),
-            }
-    paper = PAPER_DIAMETERS_M.get(round(abs(math.degrees(roll_rad)), 6))
-    summary["paper_diameter_m"] = paper
-    if paper is not None and summary["diameter_m"] is not None:
-        summary["relative_to_paper"] = summary["diameter_m"] / paper - 1.0
-    log.info("circle %s/%s roll %.1f deg: %s", plant, driver, math.degrees(roll_rad), summary["diameter_m"])
+
+
+def _plant_summary(loop: _HeldRollLoop, dt: float, settle: float, params: RodParams) -> dict[str, Any]:
+    """What the plant says about itself: measured rod rates, feet and the source of the diameter."""
+    sphere, rec = loop.sphere, loop.rec
+    if not isinstance(sphere, MujocoSphere):
+        return {"diameter_source": "surrogate: the profile's roll model (table), not physics"}
+    measured = np.asarray(rec["rod_measured_m"])
     return {
-        "robot": profile.name,
-        "rate_hz": rate_hz,
-        "plant": plant_json(sphere),
-        "params": params.to_json(),
-        "summary": summary,
-        "series": rec,
+        "measured_rod_rate": rod_rate_stats(measured, dt, params.rod_speed_m_s),
+        "peak_rod_speed_m_s": sphere.sim.peak_rod_speed_m_s,
+        "max_rod_length_m": float(measured.max()),
+        "mean_rods_on_ground": float(np.mean(rec["rods_on_ground"])),
+        "diameter_source": "MuJoCo rigid-body contact physics",
+        "rod_feet": loop.feet.summary(),
+    }
+
+
+def _turn_split(
+    rec: dict[str, list[Any]], settle: float, r_m: float, mean_roll_deg: float, mean_yaw_rate: float
+) -> dict[str, Any]:
+    """Heading rate = spin Ω_z + ω_h·tan(roll), averaged after ``settle`` (see :func:`run_circle`)."""
+    t = np.asarray(rec["t"])
+    late = t >= settle
+    if "spin_rad_s" in rec:
+        spin = float(np.mean(np.asarray(rec["spin_rad_s"])[late]))
+        tilt = float(np.mean(np.asarray(rec["no_spin_yaw_rate_rad_s"])[late]))
+        source = "measured: the simulated body's angular velocity (MujocoPlant.turn_rates)"
+    else:
+        omega = np.asarray(rec["omega_rad_s"], dtype=float)[late]
+        tilt = float(np.mean(omega * np.tan(np.asarray(rec["roll_rad"], dtype=float)[late])))
+        spin = mean_yaw_rate - tilt
+        source = "implied: the surrogate turns by the profile's roll table; spin = yaw rate - omega tan(roll)"
+    held = math.radians(abs(mean_roll_deg))
+    omega_h = float(np.mean(np.asarray(rec["omega_rad_s"], dtype=float)[late]))
+    lean = math.tan(math.radians(mean_roll_deg))
+    denominator = lean + spin / omega_h if abs(omega_h) > 1e-6 else 0.0
+    return {
+        "mean_spin_rad_s": spin,
+        "mean_no_spin_yaw_rate_rad_s": tilt,
+        "held_roll_deg": mean_roll_deg,
+        "no_spin_diameter_m": 2.0 * r_m / math.tan(held) if held > 1e-6 else None,
+        "spin_lean_diameter_m": abs(2.0 * r_m / denominator) if abs(denominator) > 1e-9 else None,
+        "spin_source": source,
+    }
+
+
+def _roll_pid_summary(loop: _HeldRollLoop, integral_limit: float, settle_ticks: int) -> dict[str, Any]:
+    """How the roll PID spent the run after settling: at its output limit, integral at its limit, parts."""
+    n_late = len(loop.roll_sat) - settle_ticks
+    if n_late <= 0:
+        return {}
+    late_int = np.abs(loop.roll_int[-n_late:])
+    return {
+        "roll_pid": {
+            "output_saturated_fraction": float(np.mean(loop.roll_sat[-n_late:])),
+            "integral_at_limit_fraction": float(np.mean(late_int >= integral_limit * (1 - 1e-9))),
+            "mean_integral_deg": math.degrees(float(np.mean(loop.roll_int[-n_late:]))),
+            "rms_derivative_part_deg": math.degrees(float(np.sqrt(np.mean(np.square(loop.roll_d[-n_late:]))))),
+        }
     }
 
 

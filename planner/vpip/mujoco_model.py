@@ -12,7 +12,11 @@ Body frame (at the sphere centre) = the paper's frame of eq. 9/12 at zero roll a
 ring points along ``(0, −sin ζ_k, −cos ζ_k)`` with ``ζ_k = 2πk/n`` (eq. 12 at φ_r = 0), the same layout
 as :func:`planner.vpip.rods.rod_layout` (rods ``0 … n−1`` left, ``n … 2n−1`` right). Each rod is a
 housing welded to the body (the fixed part, from the disc centre to the shell) and a telescope on a
-slide joint along the rod axis, range ``[0, l_max]``, driven by a position servo. The rod line ends at
+slide joint along the rod axis, range ``[0, l_max]``, driven by a velocity servo (a leadscrew: the
+plant in :mod:`planner.vpip.mujoco_plant` commands a velocity within ``±rod_speed_m_s``, so no rod ever
+moves faster than Table 1's 0.1 m/s). The servo has no force limit: a telescope on a self-locking
+leadscrew holds whatever the ground pushes on it (a force-limited servo let landing impacts drive the
+rods back at up to 3 m/s, far beyond any real rod). The rod line ends at
 ``λ = r_s + l`` from the disc centre (site ``tip_k``); the rod's contact geom is a small sphere whose
 outermost point is that tip, so a retracted rod is flush with the shell (eq. 7: r_s² + d_m^s² = r_m²).
 
@@ -54,9 +58,8 @@ class BodyParams:
     rod_mass_kg: float = 1.4
     rod_moving_fraction: float = 0.5
     rod_tip_radius_m: float = 0.01
-    rod_servo_kp_n_m: float = 2.0e5
-    rod_servo_damping_ratio: float = 1.0
-    rod_force_limit_n: float = 2000.0
+    rod_servo_gain_n_s_m: float = 1.0e4
+    rod_servo_tracking_s: float = 0.02
     ground_friction: float = 1.0
     rod_tip_friction: float = 1.0
     ground_torsional_friction_m: float = 0.03
@@ -113,8 +116,7 @@ def build_mjcf(params: RodParams, body: BodyParams) -> str:
     r_m, r_s, l_max = params.r_m, params.r_s, params.l_max
     rod_fixed = body.rod_mass_kg * (1.0 - body.rod_moving_fraction)
     rod_moving = body.rod_mass_kg * body.rod_moving_fraction
-    kp = body.rod_servo_kp_n_m
-    kv = 2.0 * body.rod_servo_damping_ratio * math.sqrt(kp * rod_moving)
+    kv = body.rod_servo_gain_n_s_m
     seg = l_max / 3.0  # Table 1: three telescopic segments
     # baseplate: a solid disc around the axle (x); battery: a compact box on a pendulum arm
     bp_m, bp_r, bp_h = body.baseplate_mass_kg, body.baseplate_radius_m, body.baseplate_thickness_m
@@ -165,8 +167,8 @@ def build_mjcf(params: RodParams, body: BodyParams) -> str:
     lines += ["    </body>", "  </worldbody>", "  <actuator>"]
     for i in range(params.n_rods):
         lines.append(
-            f'    <position name="rod{i}" joint="rod{i}" kp="{kp:.9g}" kv="{kv:.9g}" '
-            f'ctrlrange="0 {l_max:.9g}" forcerange="{-body.rod_force_limit_n:.9g} {body.rod_force_limit_n:.9g}"/>'
+            f'    <velocity name="rod{i}" joint="rod{i}" kv="{kv:.9g}" '
+            f'ctrlrange="{-params.rod_speed_m_s:.9g} {params.rod_speed_m_s:.9g}"/>'
         )
     lines += ["  </actuator>", "</mujoco>", ""]
     return "\n".join(lines)

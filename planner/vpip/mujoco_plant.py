@@ -3,8 +3,10 @@
 Paper 000 closes its controllers (Fig. 5) on the robot's measured roll φ_r and rotational speed ω and
 drives the 16 rods with the eq. 18 lengths; §5 runs this on a Gazebo model. :class:`MujocoPlant` is that
 loop's plant here: it takes the 16 commanded rod lengths every control tick (100 Hz, Table 1), moves each
-rod's servo reference linearly across the tick (a rod moves at most ``rod_speed_m_s``, the driver has
-already rate-limited the command) and steps MuJoCo; :meth:`MujocoPlant.observe` reads what an IMU and
+rod's reference linearly across the tick and, every physics step, asks the rod's velocity servo for the
+reference's rate plus a correction of any lag, clipped to ``±rod_speed_m_s`` (so the plant itself never
+drives a rod faster than Table 1's 0.1 m/s; the driver has already rate-limited the lengths), and steps
+MuJoCo; :meth:`MujocoPlant.observe` reads what an IMU and
 odometry would give: roll, rolling rate ω, pitch phase (how far the sphere has rolled, which sets every
 rod's ζ) and the planar pose.
 
@@ -127,6 +129,7 @@ class MujocoPlant:
         self._phase = 0.0
         self._last_wrapped_phase = 0.0
         self._ctrl = np.zeros(n)
+        self.peak_rod_speed_m_s = 0.0
         if settle_s > 0:
             self._advance(np.zeros(n), settle_s)
         self.time_offset_s = float(self.data.time)
@@ -216,12 +219,25 @@ class MujocoPlant:
 
     # ------------------------------------------------------------- stepping
     def _advance(self, target: np.ndarray, duration_s: float) -> None:
+        """Move every rod's reference linearly to ``target`` over ``duration_s`` and step MuJoCo.
+
+        Each physics step the rod servos get the velocity ``ref_rate + (ref − q) / rod_servo_tracking_s``
+        clipped to ``±rod_speed_m_s`` (the actuators' control range): a rod follows its reference and
+        makes up any lag, but never faster than Table 1's extension speed.
+        """
         mujoco = self._mj
         steps = max(1, round(duration_s / self.model.opt.timestep))
         start = self._ctrl.copy()
+        rate = (target - start) / (steps * self.model.opt.timestep)
+        vmax = self.params.rod_speed_m_s
+        gain = 1.0 / self.body.rod_servo_tracking_s
         for i in range(1, steps + 1):
-            self.data.ctrl[:] = start + (target - start) * (i / steps)
+            ref = start + (target - start) * (i / steps)
+            q = self.data.qpos[self._rod_qpos]
+            self.data.ctrl[:] = np.clip(rate + gain * (ref - q), -vmax, vmax)
             mujoco.mj_step(self.model, self.data)
+            speed = float(np.max(np.abs(self.data.qvel[self._rod_qvel])))
+            self.peak_rod_speed_m_s = max(self.peak_rod_speed_m_s, speed)
         self._ctrl = target.copy()
 
     def step(self, rod_lengths_m: np.ndarray, dt_s: float) -> None:
@@ -230,6 +246,5 @@ class MujocoPlant:
         if target.shape != (self.params.n_rods,):
             raise InvalidInput("rod_lengths_m", f"needs shape ({self.params.n_rods},), got {target.shape}")
         self._advance(target, dt_s)
-        self.peak_rod_speed_m_s = max(self.peak_rod_speed_m_s, float(np.max(np.abs(self.rod_speeds_m_s()))))
         if not np.all(np.isfinite(self.data.qpos)):
             raise FloatingPointError("MuJoCo state became non-finite")

@@ -2,9 +2,10 @@
 
 ``--suite real`` instead draws seeded random problems on Nav2's maps (``maps/real``) the way Nav2's planner
 benchmark does and compares sphereplan with OMPL BIT* on Dubins and Reeds–Shepp spaces
-(:mod:`lab.planning.real`, docs/planning.md "The real-map benchmark"). ``--suite load`` runs the service under
-load (:func:`lab.loadtest.fleet_main`: one instance vs two behind HAProxy, health probes under big bodies,
-failover).
+(:mod:`lab.planning.real`, docs/planning.md "The real-map benchmark"). ``--suite perception`` times stereo
+obstacle perception and EIS at paper 001's three resolutions next to the paper's figures (:mod:`lab.perception_bench`,
+docs/perception.md). ``--suite load`` runs the service under load (:func:`lab.loadtest.fleet_main`: one instance
+vs two behind HAProxy, health probes under big bodies, failover).
 """
 
 from __future__ import annotations
@@ -33,12 +34,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--rrt-time", type=finite_float, default=2.0, help="RRT* budget, s (0 = skip)")
     parser.add_argument("--csv", default=None, help="CSV output (default bench.csv; bench_real.csv for --suite real)")
     parser.add_argument("--png", default=None, help="PNG output (default bench.png; bench_real.png for --suite real)")
-    parser.add_argument("--suite", choices=("planning", "reconfigure", "mpc", "all", "real", "load"),
+    parser.add_argument("--suite", choices=("planning", "reconfigure", "mpc", "all", "real", "perception", "load"),
                         default="planning",
                         help="planning: Hybrid A* vs OMPL on the shipped problems (default); reconfigure: Spherobot "
                              "plan times; mpc: MPC step times of the tracker; all: those three; real: random "
-                             "problems on Nav2's maps against BIT* (minutes); load: the service under load, one "
-                             "instance vs two behind HAProxy, and failover (needs haproxy; minutes)")
+                             "problems on Nav2's maps against BIT* (minutes); perception: stereo and EIS times at "
+                             "paper 001's three resolutions; load: the service under load, one instance vs two "
+                             "behind HAProxy, and failover (needs haproxy; minutes)")
     real = parser.add_argument_group("--suite real")
     real.add_argument("--real-maps", default=None,
                       help="comma-separated map names in maps/real or YAML paths (default: every map in maps/real)")
@@ -50,6 +52,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                       help="JSON object of sphereplan planner options (default: the defaults), e.g. "
                            "'{\"allow_reverse\": true}'")
     real.add_argument("--no-reference", action="store_true", help="skip OMPL BIT* (no solvability reference)")
+    perception = parser.add_argument_group("--suite perception")
+    perception.add_argument("--threads", type=int, default=1, help="OpenCV threads (default 1: one core)")
+    perception.add_argument("--resolutions", default=None,
+                            help="comma-separated WxH (default: the paper's 1624x1240,812x620,541x413)")
     load = parser.add_argument_group("--suite load")
     load.add_argument("--duration", type=positive_float, default=10.0, help="seconds per row (default 10)")
     load.add_argument("--workers", type=int, default=1, help="worker processes per instance (default 1)")
@@ -112,6 +118,32 @@ def run_real(args: argparse.Namespace) -> int:
     return 0
 
 
+def run_perception(args: argparse.Namespace) -> int:
+    """``--suite perception``: the timing table on stdout."""
+    from lab.perception_bench import RESOLUTIONS, bench_perception, format_perception_bench
+
+    if args.threads < 1:
+        raise InvalidInput("--threads", "must be ≥ 1")
+    resolutions = RESOLUTIONS
+    if args.resolutions:
+        paper = {(w, h): s for w, h, s in RESOLUTIONS}
+        resolutions = tuple((w, h, paper.get((w, h), float("nan"))) for w, h in _sizes(args.resolutions))
+    print(f"stereo perception and EIS per frame (obstacle course, 0.5 m baseline, {args.threads} OpenCV "
+          f"thread{'s' if args.threads > 1 else ''}, median of {args.runs} runs; paper: i7-8559U)")
+    print(format_perception_bench(bench_perception(args.runs, resolutions, args.threads)))
+    return 0
+
+
+def _sizes(text: str) -> list[tuple[int, int]]:
+    sizes = []
+    for item in text.split(","):
+        w, _, h = item.strip().lower().partition("x")
+        if not (w.isdigit() and h.isdigit() and int(w) >= 64 and int(h) >= 48):
+            raise InvalidInput("--resolutions", f"{item.strip()!r} is not WIDTHxHEIGHT (at least 64x48)")
+        sizes.append((int(w), int(h)))
+    return sizes
+
+
 def run(args: argparse.Namespace) -> int:
     if args.suite == "real":
         return run_real(args)
@@ -123,6 +155,8 @@ def run(args: argparse.Namespace) -> int:
         return fleet_main(args.duration, args.workers)
     if args.runs < 1:
         raise InvalidInput("--runs", "must be ≥ 1")
+    if args.suite == "perception":
+        return run_perception(args)
     if args.suite in ("reconfigure", "all"):
         from lab.spherobot_bench import benchmark, format_benchmark
 

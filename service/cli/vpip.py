@@ -9,6 +9,7 @@ from pathlib import Path
 from typing import Any
 
 from planner.errors import InvalidInput
+from planner.vpip.choices import CONTACTS, DRIVERS, GAIN_SETS, PLANTS
 from service.cli._io import (
     Stages,
     add_degrees_flag,
@@ -20,9 +21,6 @@ from service.cli._io import (
     read_json_file,
 )
 from service.outcome import EXIT_NO_SOLUTION
-
-#: planner.vpip.cascade.PLANTS, repeated so that --help does not import the planner (a test keeps them equal)
-PLANTS = ("surrogate", "mujoco")
 
 VERB = "vpip"
 HELP = "VPIP rod driver for rod-driven spheres (daedalus): rods, radius, roll, calibrate, schedule, circle"
@@ -89,7 +87,9 @@ def _calibrate(args: argparse.Namespace) -> int:
         circles = [read_json_file(path, f"circles[{i}]") for i, path in enumerate(args.circles)]
         result = api.calibrate_from_circles(circles, profile)
     else:
-        result = api.calibrate_by_simulation(_rolls(args.rolls), profile, args.plant, args.duration)
+        result = api.calibrate_by_simulation(
+            _rolls(args.rolls), profile, args.plant, args.duration, contact=args.contact, gains=args.gains
+        )
     if args.out:
         Path(args.out).write_text(api.profile_toml(profile, result["roll_model"]))
         load_robot(args.out)  # the written profile must load
@@ -113,6 +113,8 @@ def _circle(args: argparse.Namespace) -> int:
         args.omega,
         theta,
         heading_rad=math.radians(args.heading_deg),
+        contact=args.contact,
+        gains=args.gains,
     )
     emit_json(result, args.out)
     if args.plot:
@@ -129,7 +131,7 @@ def _schedule(args: argparse.Namespace) -> int:
     plan: Any = read_json_file(args.path, "path")
     with Stages("vpip schedule", ["schedule", *(["plot"] if args.plot else [])]) as stages:
         stages.start("schedule")
-        result = api.schedule_report(plan, args.robot, args.driver, args.plant)
+        result = api.schedule_report(plan, args.robot, args.driver, args.plant, args.contact, args.gains)
         if is_mcap_out(args.out):
             from service.ros import write_schedule_mcap
 
@@ -158,6 +160,20 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
     def common(p: argparse.ArgumentParser, robot_default: str | None = "daedalus") -> None:
         p.add_argument("--robot", default=robot_default, help="profile name or TOML path (default: daedalus)")
+
+    def settings(p: argparse.ArgumentParser) -> None:
+        p.add_argument(
+            "--contact",
+            choices=CONTACTS,
+            help="MuJoCo contact setting from the profile: regolith (its default) or paper (the paper's Gazebo "
+            "defaults: Table 1 friction, no spin or rolling friction); docs/vpip.md",
+        )
+        p.add_argument(
+            "--gains",
+            choices=GAIN_SETS,
+            help="controller gains from the profile: rod-rate (its default, chosen for 0.1 m/s rods) or table1 "
+            "(paper 000 Table 1); docs/vpip.md",
+        )
 
     rods = sub.add_parser("rods", help="eq. 18 length of every rod for one plane, roll and pitch phase")
     rods.add_argument(
@@ -194,6 +210,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     cal.add_argument("--duration", type=positive_float, default=30.0, help="seconds per simulated circle")
     cal.add_argument("--out", help="write the profile with the fitted table to this TOML file")
     common(cal)
+    settings(cal)
     cal.set_defaults(func=_calibrate)
 
     sched = sub.add_parser("schedule", help="100 Hz VPIP angles and rod lengths along a planned path")
@@ -204,12 +221,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                        "writes ROS 2 messages (rod lengths and plane angles as JointState, the plan)")
     sched.add_argument("--plot", help="write a PNG: rod-length heat map, roll and plane angles, path")
     sched.add_argument(
-        "--driver", choices=("vpip", "simple"), default="vpip", help="rod driver (default vpip)"
+        "--driver", choices=DRIVERS, default="vpip", help="rod driver (default vpip)"
     )
     sched.add_argument(
         "--plant", choices=PLANTS, default="surrogate", help="surrogate (fast, default) or mujoco (rod physics)"
     )
     common(sched)
+    settings(sched)
     sched.set_defaults(func=_schedule)
 
     circ = sub.add_parser("circle", help="hold a roll (and omega) on a plant and fit the circle rolled (paper §5)")
@@ -220,7 +238,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     circ.add_argument("--duration", type=positive_float, default=30.0, help="simulated seconds (default 30)")
     circ.add_argument("--out", required=True, help="write the result with its time series (JSON) here")
     circ.add_argument("--plot", help="write a PNG: track with fitted circle, roll, omega, rods")
-    circ.add_argument("--driver", choices=("vpip", "simple"), default="vpip", help="rod driver (default vpip)")
+    circ.add_argument("--driver", choices=DRIVERS, default="vpip", help="rod driver (default vpip)")
     circ.add_argument("--omega", type=positive_float, default=1.0, help="desired rolling rate (rad/s, default 1)")
     circ.add_argument(
         "--theta-deg",
@@ -234,5 +252,6 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="start heading (deg, default 0); repeat a MuJoCo run at other headings to see its spread",
     )
     common(circ)
+    settings(circ)
     circ.set_defaults(func=_circle)
     parser.set_defaults(func=lambda args: args.func(args))

@@ -112,6 +112,14 @@ def test_circle_verb_and_calibrate_from_its_output(capsys: pytest.CaptureFixture
         want = 2 * load_robot("daedalus").roll_model.turning_radius(math.radians(float(roll)))
         assert summary["diameter_m"] == pytest.approx(want, rel=0.1)
         assert summary["commanded_rod_rate"]["max_m_s"] <= 0.1 + 1e-9
+        # every circle run splits its turn; the surrogate's spin is what its table implies beyond the lean
+        assert "implied" in summary["spin_source"] and summary["held_roll_deg"] == summary["mean_roll_deg"]
+        assert summary["mean_spin_rad_s"] + summary["mean_no_spin_yaw_rate_rad_s"] == pytest.approx(
+            summary["mean_yaw_rate_rad_s"]
+        )
+        held = math.radians(summary["held_roll_deg"])
+        assert summary["no_spin_diameter_m"] == pytest.approx(2 * 0.232 / math.tan(held))
+        assert summary["mean_spin_rad_s"] > 0  # the paper's table is tighter than 2r/tan(roll)
         outs.append(str(out))
     # --heading-deg only turns the start: on the surrogate the same circle, started 90 deg to the left
     out = tmp_path / "c15h.json"
@@ -146,3 +154,39 @@ def test_circle_and_calibrate_bad_input_exit_2(capsys: pytest.CaptureFixture[str
     bad.write_text('{"summary": {"roll_desired_deg": 5, "diameter_m": null}}')
     assert main(["vpip", "calibrate", "--circles", str(bad)]) == 2
     assert "circles[0].summary.diameter_m" in capsys.readouterr().err
+
+
+def test_circle_and_calibrate_take_a_contact_setting(capsys: pytest.CaptureFixture[str], tmp_path: Path) -> None:
+    """``--contact paper`` reaches the MuJoCo model and the summary carries the spin/lean split (issue 24)."""
+    out = tmp_path / "c.json"
+    code, summary = _run(
+        capsys,
+        ["vpip", "circle", "--roll-deg", "10", "--duration", "3", "--contact", "paper", "--out", str(out)],
+    )
+    assert code == 0 and summary["contact"] == "paper" and summary["gains"] == "rod-rate"
+    for key in ("diameter_m", "mean_omega_rad_s", "mean_roll_deg", "mean_spin_rad_s", "no_spin_diameter_m"):
+        assert key in summary
+    written = json.loads(out.read_text())
+    assert written["plant"]["ground_friction"] == 100.0 and written["plant"]["ground_torsional_friction_m"] == 0.0
+    assert written["summary"]["held_roll_deg"] == summary["mean_roll_deg"]
+    code, table1 = _run(
+        capsys,
+        [*("vpip", "circle", "--roll-deg", "10", "--duration", "3", "--gains", "table1"), "--out", str(out)],
+    )
+    assert code == 0 and table1["contact"] == "regolith" and table1["gains"] == "table1"
+    assert json.loads(out.read_text())["plant"]["ground_torsional_friction_m"] == pytest.approx(0.03)
+    # calibrate --rolls runs its circles on the contact asked for and says so beside the table
+    prof = tmp_path / "paper.toml"
+    code, cal = _run(
+        capsys,
+        [*("vpip", "calibrate", "--rolls", "15", "--duration", "8", "--contact", "paper"), "--out", str(prof)],
+    )
+    assert code == 0 and cal["contact"] == "paper" and cal["roll_model"]["roll_deg"] == [15.0]
+    assert [c["contact"] for c in cal["circles"]] == ["paper"]
+    assert cal["roll_model"]["diameter_m"] == [cal["circles"][0]["diameter_m"]]
+    assert load_robot(str(prof)).roll_model.turning_radius(math.radians(15)) == pytest.approx(
+        cal["roll_model"]["diameter_m"][0] / 2
+    )
+    # a name the profile does not offer is refused by the door, naming the flag
+    assert main(["vpip", "circle", "--roll-deg", "10", "--contact", "gazebo", "--out", str(out)]) == 2
+    assert "--contact" in capsys.readouterr().err
