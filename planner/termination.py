@@ -1,7 +1,9 @@
 """When long work must stop: one object from the door to the loop (OMPL's ``PlannerTerminationCondition``).
 
 A :class:`Termination` is what a caller asks for — a wall-clock time limit, an optional cancel flag and an
-optional iteration cap. It is built once where the request enters (the CLI's ``--time-limit``, the HTTP and
+optional iteration cap. The Hybrid A* search polls its clock between compiled chunks; the other loops a
+request can start (``simulate_plan``, ``plan_reconfiguration``, the VPIP schedule) call :meth:`Clock.check`
+every few steps. It is built once where the request enters (the CLI's ``--time-limit``, the HTTP and
 Zenoh ``time_limit_s``) and passed unchanged to every loop that can run long; the loop calls :meth:`start`
 when its clock starts (after one-off compilation, so a limit is never spent compiling) and polls the
 :class:`Clock` it gets back. A process pool cannot send a callable, so the door sends the termination without
@@ -15,7 +17,7 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass, replace
 
-from planner.errors import InvalidInput
+from planner.errors import InvalidInput, PlannerCancelled, PlannerTimedOut
 
 DEFAULT_TIME_LIMIT_S = 5.0
 """The time limit when the caller gives none (s), as Nav2's planner server's default ``expected_planner_frequency``
@@ -77,6 +79,16 @@ class Clock:
     def cancelled(self) -> bool:
         """The caller asked to stop."""
         return self.termination.cancel is not None and bool(self.termination.cancel())
+
+    def check(self, what: str) -> None:
+        """For loops other than the search (a simulation, a rolled manoeuvre, a VPIP schedule): raise
+        :class:`~planner.errors.PlannerCancelled` if the caller asked to stop, :class:`~planner.errors.PlannerTimedOut`
+        if the time limit has passed; ``what`` names the loop in the message."""
+        if self.cancelled():
+            raise PlannerCancelled(f"{what} was cancelled", planning_time_s=self.elapsed_s())
+        if self.expired():
+            raise PlannerTimedOut(f"{what} did not finish within its time limit of {self.time_limit_s:g} s",
+                                  planning_time_s=self.elapsed_s())
 
     def over_iterations(self, iterations: int) -> bool:
         """``iterations`` reached the cap."""

@@ -47,9 +47,9 @@ from service.jobs import (
     warm_up_job,
     worker_init,
 )
-from service.outcome import Outcome, ServiceBusy, error_outcome, outcome_of_exception
+from service.outcome import Outcome, ServiceBusy, WorkerLost, error_outcome, outcome_of_exception
 from service.pipeline import MAX_RESULT_STATES, PlanQuery
-from service.pool import START_TIMEOUT_S, SupervisedPool, WorkerDied
+from service.pool import START_TIMEOUT_S, SupervisedPool
 from service.settings import ServiceSettings
 from service.wire import (
     InlineGrid,
@@ -66,11 +66,12 @@ from service.wire import (
 
 log = logging.getLogger(__name__)
 
-#: farthest reconfiguration goal, in sphere radii from the start (paper 004's examples are a few radii)
-MAX_RECONFIGURE_RADII = 200
 #: added to a plan's time limit for the pool's hard deadline: loading the map (a mesh's first load) is not
 #: part of the time limit, the search, smoothing and result building are (the job checks those itself)
 MAP_LOAD_ALLOWANCE_S = 10.0
+#: how long past its own wall-clock termination a job may run before the pool kills its worker (s): the loops
+#: check their clock every few steps, so only a job stuck where it cannot look at it meets this
+JOB_STOP_ALLOWANCE_S = 5.0
 #: widest inline grid a plan may use (m, diagonal): cells × resolution, so a few cells cannot span a continent
 MAX_INLINE_EXTENT_M = 2_000.0
 
@@ -183,9 +184,9 @@ class PlanningService:
                 outcome = error_outcome(ServiceBusy, "the service is shutting down")
             elif (exc := job.exception()) is None:
                 outcome = job.result()
-            elif isinstance(exc, WorkerDied):
+            elif isinstance(exc, WorkerLost):  # a server fault: 503, the request may be sent again
                 log.error("job %s failed: %s", getattr(fn, "__name__", fn), exc)
-                outcome = error_outcome(WorkerDied, "a worker process died while running this job")
+                outcome = outcome_of_exception(exc)
             elif isinstance(exc, RuntimeError) and self._closing:
                 outcome = error_outcome(ServiceBusy, "the service is shutting down")
             else:
@@ -312,20 +313,24 @@ class PlanningService:
         robot = self._plan_robot(request.robot, request.path, DEFAULT_ROBOT)
         options = SimulationOptions(control_rate_hz=request.rate_hz, tracker=request.tracker,
                                     mpc=MPCParams(horizon=request.horizon), time_limit_s=request.time_limit_s)
+        termination, deadline = self._job_termination()
         return self._submit(simulate_job, request.path.model_dump(mode="json"), self._map_source(request.map), robot,
-                            request.seed, request.noise, options)
+                            request.seed, request.noise, options, termination, deadline_s=deadline)
+
+    def _job_termination(self) -> tuple[Termination, float]:
+        """The wall-clock termination of a job without a time limit of its own (``max_job_s``; the job stops
+        itself at it) and the pool's deadline, ``JOB_STOP_ALLOWANCE_S`` later (only a job that cannot stop is
+        killed there)."""
+        return Termination(self.settings.max_job_s), self.settings.max_job_s + JOB_STOP_ALLOWANCE_S
 
     def submit_reconfigure(self, request: ReconfigureIn) -> Future[Outcome]:
-        """Queue a Spherobot reconfiguration (optionally checked against a map). The goal may be at most
-        ``MAX_RECONFIGURE_RADII`` sphere radii from the start: the rolled result is sampled along the way,
-        so its size and cost grow with distance / radius."""
+        """Queue a Spherobot reconfiguration (optionally checked against a map). The request itself bounds the
+        radius and the goal's distance (``planner.spherobot.request.MAX_RADII`` sphere radii from the start: the
+        rolled result is sampled along the way, so its size and cost grow with distance / radius)."""
         problem = ReconfigureRequest.from_dict(request.model_dump(exclude={"map"}))
-        assert problem.radius_m is not None
-        distance, farthest = math.dist(problem.start, problem.goal), MAX_RECONFIGURE_RADII * problem.radius_m
-        if distance > farthest:
-            raise InvalidInput("goal", f"is {distance:.3g} m from the start; this server rolls at most "
-                                       f"{MAX_RECONFIGURE_RADII} sphere radii ({farthest:.3g} m)")
-        return self._submit(reconfigure_job, problem, None if request.map is None else self._map_source(request.map))
+        termination, deadline = self._job_termination()
+        return self._submit(reconfigure_job, problem, None if request.map is None else self._map_source(request.map),
+                            termination, deadline_s=deadline)
 
     def submit_vpip_rods(self, request: VpipRodsRequest) -> Future[Outcome]:
         """Queue one eq. 18 rod-length evaluation."""
@@ -336,7 +341,9 @@ class PlanningService:
     def submit_vpip_schedule(self, request: VpipScheduleRequest) -> Future[Outcome]:
         """Queue a 100 Hz VPIP schedule along ``request.path`` (robot: the request's, the plan's, daedalus)."""
         robot = self._plan_robot(request.robot, request.path, "daedalus")
-        return self._submit(vpip_schedule_job, request.path.model_dump(mode="json"), robot, request.driver)
+        termination, deadline = self._job_termination()
+        return self._submit(vpip_schedule_job, request.path.model_dump(mode="json"), robot, request.driver,
+                            termination, deadline_s=deadline)
 
     def submit_tensegrity_static(self, request: TensegrityStaticRequest) -> Future[Outcome]:
         """Queue the TeXploR static-state computation."""

@@ -16,10 +16,12 @@ service is answered as the outcome table says (:mod:`service.outcome`); the HTTP
 422    wrong types, unknown fields, NaN/inf, negative or too long time limits, bad options;
        a plan that failed (start/goal outside or occupied 203–206, timeout 207, no path 208):
        the body is then the failed-result JSON (``status: failed``) the CLI prints
-503    the pool is full (``Retry-After`` header), the service is not ready, or it is shutting down
+503    the pool is full (``Retry-After`` header), too many large bodies waiting to be parsed, the service is
+       not ready or shutting down, or the worker under the job died or hung (``Retry-After``)
 =====  ==================================================================================
 
-Nothing a client sends produces a 5xx; a 500 means a bug and is logged with its traceback.
+Nothing a client sends produces a 5xx; a server fault is a 503, a 500 means a bug and is logged with its
+traceback. Bodies are read by :func:`json_body`: a large one is parsed in a parse process (:mod:`service.limits`).
 """
 
 from __future__ import annotations
@@ -42,6 +44,7 @@ from starlette.exceptions import HTTPException as StarletteHTTPException
 from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
 from service.core import PlanningService
+from service.limits import SMALL_BODY_BYTES, MalformedBody, ParseGate, parse_json_model
 from service.outcome import ANSWERS, Outcome, error_body, outcome_of_exception
 from service.settings import ServiceSettings
 from service.wire import (
@@ -74,7 +77,7 @@ def _error(status: int, msg: str, field: str | None = None, headers: dict[str, s
 
 def outcome_response(outcome: Outcome, retry_after_s: int = 1) -> Response:
     """An :class:`Outcome` as an HTTP response with its row's status; the body bytes are sent as they are."""
-    headers = {"Retry-After": str(retry_after_s)} if outcome.kind == "busy" else None
+    headers = {"Retry-After": str(retry_after_s)} if outcome.kind in ("busy", "unavailable") else None
     return Response(outcome.body, outcome.answer.http_status, headers, media_type=JSON)
 
 
@@ -104,6 +107,70 @@ async def answer(request: Request, service: PlanningService, submit: Callable[[M
         service.cancel(future)
         raise
     return outcome_response(await waiter, service.settings.retry_after_s)
+
+
+class BodyRefused(Exception):
+    """An HTTP-level refusal of a body (415 not JSON, 400 empty or malformed), answered with the error JSON."""
+
+    def __init__(self, status: int, msg: str, field: str) -> None:
+        super().__init__(msg)
+        self.status, self.msg, self.field = status, msg, field
+
+
+def json_body(model: type[M]) -> Callable[[Request], Any]:
+    """A dependency that reads the request body as ``model`` (documented in OpenAPI by :func:`body_doc`).
+
+    The body is bounded by :class:`BodyLimit`; a small one is parsed on the event loop, a large one (an inline
+    map) in the parse pool of :mod:`service.limits` (at most ``PARSE_CONCURRENCY`` at once, further ones wait,
+    beyond ``MAX_PENDING_PARSES`` 503), so health probes and small requests never wait behind big bodies."""
+
+    async def read(request: Request) -> Any:
+        content_type = request.headers.get("content-type", "").split(";")[0].strip().lower()
+        if not (content_type == JSON or content_type.endswith("+json")):
+            got = repr(content_type) if content_type else "none"
+            raise BodyRefused(415, f"Content-Type must be {JSON}, got {got}", "content-type")
+        raw = await request.body()
+        limit = get_service(request).settings.max_body_bytes
+        try:
+            if len(raw) <= SMALL_BODY_BYTES:
+                return parse_json_model(model, raw, limit)
+            gate: ParseGate = request.app.state.parse_gate
+            return await asyncio.wrap_future(gate.submit(model, raw, limit))
+        except MalformedBody as exc:
+            raise BodyRefused(400, exc.msg, exc.field) from None
+
+    read.__name__ = f"{model.__name__}_body"
+    return read
+
+
+#: the request models documented through :func:`body_doc` (added to the OpenAPI components by create_app)
+_BODY_MODELS: list[type[BaseModel]] = []
+
+
+def body_doc(model: type[BaseModel]) -> dict[str, Any]:
+    """The OpenAPI ``requestBody`` of a route that reads ``model`` with :func:`json_body`."""
+    _BODY_MODELS.append(model)
+    return {"requestBody": {"required": True, "content": {JSON: {"schema": {
+        "$ref": f"#/components/schemas/{model.__name__}"}}}}}
+
+
+def _openapi_with_bodies(app: FastAPI) -> Callable[[], dict[str, Any]]:
+    from pydantic.json_schema import models_json_schema
+
+    build = app.openapi
+
+    def openapi() -> dict[str, Any]:
+        if app.openapi_schema is None:
+            schema = build()
+            _, defs = models_json_schema([(m, "validation") for m in dict.fromkeys(_BODY_MODELS)],
+                                         ref_template="#/components/schemas/{model}")
+            components = schema.setdefault("components", {}).setdefault("schemas", {})
+            for name, definition in defs.get("$defs", {}).items():
+                components.setdefault(name, definition)
+            app.openapi_schema = schema
+        return app.openapi_schema
+
+    return openapi
 
 
 class BodyLimit:
@@ -188,6 +255,16 @@ def get_service(request: Request) -> PlanningService:
 
 
 Service = Annotated[PlanningService, Depends(get_service)]
+
+
+# request bodies, read by json_body (off the event loop when large)
+PlanBody = Annotated[PlanRequest, Depends(json_body(PlanRequest))]
+SimulateBody = Annotated[SimulateRequest, Depends(json_body(SimulateRequest))]
+ReconfigureBody = Annotated[ReconfigureIn, Depends(json_body(ReconfigureIn))]
+VpipRodsBody = Annotated[VpipRodsRequest, Depends(json_body(VpipRodsRequest))]
+VpipScheduleBody = Annotated[VpipScheduleRequest, Depends(json_body(VpipScheduleRequest))]
+TensegrityStaticBody = Annotated[TensegrityStaticRequest, Depends(json_body(TensegrityStaticRequest))]
+PerceiveBody = Annotated[PerceiveRequest, Depends(json_body(PerceiveRequest))]
 MapName = Annotated[str, PathParam(pattern=NAME_PATTERN, description="a map in the maps folder")]
 ERRORS: dict[int | str, dict[str, Any]] = {
     code: {"model": ErrorBody, "description": text} for code, text in
@@ -217,8 +294,8 @@ async def readyz(service: Service) -> Any:
 plan = APIRouter(prefix="/v1", tags=["plan"])
 
 
-@plan.post("/plan", response_model=PlanResultOut, responses=ERRORS)
-async def post_plan(request: Request, body: PlanRequest, service: Service) -> Response:
+@plan.post("/plan", response_model=PlanResultOut, responses=ERRORS, openapi_extra=body_doc(PlanRequest))
+async def post_plan(request: Request, body: PlanBody, service: Service) -> Response:
     """Plan a rollable path from ``start`` to ``goal`` on a named map (or an inline grid, at most
     ``max_inline_cells`` cells). Answers the plan result JSON — the same object ``sphereplan plan``
     prints. A failed plan answers 422 with the failed-result JSON and its Nav2 code."""
@@ -228,8 +305,8 @@ async def post_plan(request: Request, body: PlanRequest, service: Service) -> Re
 simulate = APIRouter(prefix="/v1", tags=["simulate"])
 
 
-@simulate.post("/simulate", responses=ERRORS)
-async def post_simulate(request: Request, body: SimulateRequest, service: Service) -> Response:
+@simulate.post("/simulate", responses=ERRORS, openapi_extra=body_doc(SimulateRequest))
+async def post_simulate(request: Request, body: SimulateBody, service: Service) -> Response:
     """Roll a plan (the result of ``/v1/plan``) in closed loop on a map: simulator, odometry/GNSS fusion
     and the MPC tracker of paper 001. Answers the SIM.json object ``sphereplan simulate`` writes
     (``trajectory``, ``estimate``, ``odometry``, ``gnss``, ``commands``, ``metrics``)."""
@@ -239,8 +316,8 @@ async def post_simulate(request: Request, body: SimulateRequest, service: Servic
 reconfigure = APIRouter(prefix="/v1", tags=["reconfigure"])
 
 
-@reconfigure.post("/reconfigure", responses=ERRORS)
-async def post_reconfigure(request: Request, body: ReconfigureIn, service: Service) -> Response:
+@reconfigure.post("/reconfigure", responses=ERRORS, openapi_extra=body_doc(ReconfigureIn))
+async def post_reconfigure(request: Request, body: ReconfigureBody, service: Service) -> Response:
     """Spherobot reconfiguration (paper 004): reach ``goal`` with the camera point P on top (and, with
     ``goal_heading``, a heading), proved by rolling the sphere through SO(3). What ``sphereplan
     reconfigure`` prints; with ``map`` the swept sphere is checked against it (failures 203–206, 208)."""
@@ -250,15 +327,15 @@ async def post_reconfigure(request: Request, body: ReconfigureIn, service: Servi
 vpip = APIRouter(prefix="/v1/vpip", tags=["vpip"])
 
 
-@vpip.post("/rods", responses=ERRORS)
-async def post_vpip_rods(request: Request, body: VpipRodsRequest, service: Service) -> Response:
+@vpip.post("/rods", responses=ERRORS, openapi_extra=body_doc(VpipRodsRequest))
+async def post_vpip_rods(request: Request, body: VpipRodsBody, service: Service) -> Response:
     """Eq. 18 length of every rod of a rod-driven sphere (paper 000) for one VPIP plane, roll and pitch
     phase: what ``sphereplan vpip rods`` prints."""
     return await answer(request, service, service.submit_vpip_rods, body)
 
 
-@vpip.post("/schedule", responses=ERRORS)
-async def post_vpip_schedule(request: Request, body: VpipScheduleRequest, service: Service) -> Response:
+@vpip.post("/schedule", responses=ERRORS, openapi_extra=body_doc(VpipScheduleRequest))
+async def post_vpip_schedule(request: Request, body: VpipScheduleBody, service: Service) -> Response:
     """The 100 Hz VPIP cascade along a plan: plane angles and rod lengths per tick, the series
     ``sphereplan vpip schedule --out`` writes."""
     return await answer(request, service, service.submit_vpip_schedule, body)
@@ -267,8 +344,8 @@ async def post_vpip_schedule(request: Request, body: VpipScheduleRequest, servic
 tensegrity = APIRouter(prefix="/v1/tensegrity", tags=["tensegrity"])
 
 
-@tensegrity.post("/static", responses=ERRORS)
-async def post_tensegrity_static(request: Request, body: TensegrityStaticRequest, service: Service) -> Response:
+@tensegrity.post("/static", responses=ERRORS, openapi_extra=body_doc(TensegrityStaticRequest))
+async def post_tensegrity_static(request: Request, body: TensegrityStaticBody, service: Service) -> Response:
     """The four hybrid static states of the TeXploR two-arc robot (paper 002) for slider angles θ1, θ2:
     what ``sphereplan tensegrity static`` prints."""
     return await answer(request, service, service.submit_tensegrity_static, body)
@@ -277,8 +354,8 @@ async def post_tensegrity_static(request: Request, body: TensegrityStaticRequest
 perception = APIRouter(prefix="/v1", tags=["perception"])
 
 
-@perception.post("/perceive", responses=ERRORS)
-async def post_perceive(request: Request, body: PerceiveRequest, service: Service) -> Response:
+@perception.post("/perceive", responses=ERRORS, openapi_extra=body_doc(PerceiveRequest))
+async def post_perceive(request: Request, body: PerceiveBody, service: Service) -> Response:
     """Stereo obstacle perception (paper 001 §3.2): base64 images and camera_info documents of a pair, the
     sphere's pose and roll → the kept obstacle points in the map frame (``points_map``, N × 3, m) and the sensor
     origin (``origin_map``): what ``sphereplan perceive`` prints."""
@@ -291,7 +368,7 @@ maps = APIRouter(prefix="/v1", tags=["maps"])
 @maps.get("/maps", response_model=list[MapInfo])
 async def get_maps(service: Service) -> list[dict[str, Any]]:
     """The maps in the maps folder (the names ``map`` may take)."""
-    return service.maps()
+    return await asyncio.to_thread(service.maps)
 
 
 @maps.get("/maps/{name}.png", response_class=Response, responses={200: {"content": {"image/png": {}}}, **ERRORS})
@@ -359,6 +436,10 @@ def install_error_handlers(app: FastAPI) -> None:
                                                             ("body",)) for e in errors)
         return _error(400 if malformed else 422, str(error), error.field)
 
+    @app.exception_handler(BodyRefused)
+    async def body_refused(request: Request, exc: BodyRefused) -> JSONResponse:
+        return _error(exc.status, exc.msg, exc.field)
+
     @app.exception_handler(StarletteHTTPException)
     async def http_error(request: Request, exc: StarletteHTTPException) -> JSONResponse:
         return _error(exc.status_code, str(exc.detail), headers=getattr(exc, "headers", None))
@@ -383,12 +464,13 @@ def create_app(settings: ServiceSettings | None = None, service: PlanningService
     @asynccontextmanager
     async def lifespan(app: FastAPI) -> AsyncIterator[None]:
         node = None
+        await asyncio.to_thread(app.state.parse_gate.warm)
         await asyncio.to_thread(svc.start)
         try:
             if settings.zenoh:
                 from service.zenoh_node import ZenohNode
 
-                node = ZenohNode(svc, settings)
+                node = ZenohNode(svc, settings, parse_gate=app.state.parse_gate)
                 await asyncio.to_thread(node.start)
             log.info("sphereplan service ready (%d workers, warm-up %.1f s)", settings.workers, svc.warm_up_s)
             yield
@@ -396,6 +478,7 @@ def create_app(settings: ServiceSettings | None = None, service: PlanningService
             if node is not None:
                 await asyncio.to_thread(node.close)
             await asyncio.to_thread(svc.close)
+            app.state.parse_gate.close()
 
     app = FastAPI(
         title="sphereplan",
@@ -407,6 +490,7 @@ def create_app(settings: ServiceSettings | None = None, service: PlanningService
         redirect_slashes=False,  # /v1/plan/ is an unknown route (404), not a redirect built from the Host header
     )
     app.state.service = svc
+    app.state.parse_gate = ParseGate(retry_after_s=settings.retry_after_s)
     app.include_router(health)
     app.include_router(plan)
     app.include_router(simulate)
@@ -418,6 +502,7 @@ def create_app(settings: ServiceSettings | None = None, service: PlanningService
     app.include_router(robots)
     app.include_router(viewer)
     install_error_handlers(app)
+    app.openapi = _openapi_with_bodies(app)  # type: ignore[method-assign]
     app.add_middleware(BodyLimit, limit=settings.max_body_bytes)
     if settings.http_token is not None:
         app.add_middleware(BearerToken, token=settings.http_token)  # outermost: checked before the body is read

@@ -114,21 +114,25 @@ def plan_job(query: PlanQuery, robot: RobotProfile, source: Path | InlineGrid) -
 
 
 def simulate_job(plan: dict[str, Any], source: Path | InlineGrid, robot_name: str, seed: int, noise: str,
-                 options: SimulationOptions) -> Outcome:
-    """``simulate_plan`` of a plan result (what ``sphereplan simulate`` writes)."""
+                 options: SimulationOptions, termination: Termination) -> Outcome:
+    """``simulate_plan`` of a plan result (what ``sphereplan simulate`` writes), stopped at ``termination``
+    (wall clock; this worker's cancel flag attached)."""
     from planner.closed_loop.simulate import simulate_plan
 
     return _job("simulate", lambda: simulate_plan(load_grid(source, None), plan, load_robot(robot_name), seed=seed,
-                                                  noise=noise, options=options))
+                                                  noise=noise, options=options,
+                                                  termination=termination.with_cancel(cancelled)))
 
 
-def reconfigure_job(problem: ReconfigureRequest, source: Path | InlineGrid | None) -> Outcome:
+def reconfigure_job(problem: ReconfigureRequest, source: Path | InlineGrid | None, termination: Termination
+                    ) -> Outcome:
     """``plan_reconfiguration``, checked against the grid when there is one (what ``sphereplan reconfigure``
-    prints)."""
+    prints), stopped at ``termination``."""
     from planner.spherobot.reconfigure import plan_reconfiguration
 
     return _job("reconfigure", lambda: plan_reconfiguration(
-        problem, grid=None if source is None else load_grid(source, None)))
+        problem, grid=None if source is None else load_grid(source, None),
+        termination=termination.with_cancel(cancelled)))
 
 
 def tensegrity_static_job(theta1: float, theta2: float, robot_name: str, verify: bool) -> Outcome:
@@ -145,11 +149,13 @@ def vpip_rods_job(phi_vpip: float, theta_vpip: float, roll: float, pitch_phase: 
     return _job("vpip rods", lambda: rods_report(phi_vpip, theta_vpip, roll, pitch_phase, robot_name))
 
 
-def vpip_schedule_job(plan: dict[str, Any], robot_name: str, driver: str) -> Outcome:
-    """``schedule_report`` of a plan result (the series ``sphereplan vpip schedule --out`` writes)."""
+def vpip_schedule_job(plan: dict[str, Any], robot_name: str, driver: str, termination: Termination) -> Outcome:
+    """``schedule_report`` of a plan result (the series ``sphereplan vpip schedule --out`` writes), stopped at
+    ``termination``."""
     from planner.vpip.api import schedule_report
 
-    return _job("vpip schedule", lambda: schedule_report(plan, robot_name, driver))
+    return _job("vpip schedule", lambda: schedule_report(plan, robot_name, driver,
+                                                         termination=termination.with_cancel(cancelled)))
 
 
 def perceive_job(left: np.ndarray, right: np.ndarray, left_info: Any, right_info: Any,

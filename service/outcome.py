@@ -27,7 +27,7 @@ EXIT_BAD_INPUT = 2
 EXIT_NO_SOLUTION = 3
 EXIT_TIMEOUT = 4
 
-Kind = Literal["ok", "bad_input", "not_found", "failed", "busy", "internal"]
+Kind = Literal["ok", "bad_input", "not_found", "failed", "busy", "unavailable", "unauthorized", "internal"]
 
 
 class ServiceBusy(Exception):
@@ -36,6 +36,17 @@ class ServiceBusy(Exception):
     def __init__(self, in_flight: int, retry_after_s: int) -> None:
         super().__init__(f"the planner is busy ({in_flight} jobs in flight); retry in {retry_after_s} s")
         self.retry_after_s = retry_after_s
+
+
+class WorkerLost(Exception):
+    """A server fault, not the request's: the worker process running the job died, or hung and was killed
+    (answered 503 with ``Retry-After``; the request may be sent again)."""
+
+
+class Unauthorized(Exception):
+    """No or wrong credentials (the bearer token on HTTP, the token attachment on Zenoh)."""
+
+    field = "authorization"
 
 
 @dataclass(frozen=True)
@@ -62,6 +73,8 @@ ANSWERS: dict[type[BaseException], Answer] = {
     NotFound: Answer("not_found", EXIT_BAD_INPUT, "error", 404, "reply_err"),
     SpherePlanError: Answer("bad_input", EXIT_BAD_INPUT, "error", 422, "reply_err"),
     ServiceBusy: Answer("busy", EXIT_FAULT, "busy", 503, "reply_err"),
+    WorkerLost: Answer("unavailable", EXIT_FAULT, "unavailable", 503, "reply_err"),
+    Unauthorized: Answer("unauthorized", EXIT_BAD_INPUT, "error", 401, "reply_err"),
     BaseException: Answer("internal", EXIT_FAULT, "internal error", 500, "reply_err"),
 }
 

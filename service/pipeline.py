@@ -10,11 +10,12 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 from planner.errors import GoalOutsideMap, InvalidInput, PlannerTimedOut, StartOutsideMap
+from planner.hybrid_astar.heuristics import reeds_shepp_table
 from planner.hybrid_astar.plan import plan_path, planner_for
-from planner.hybrid_astar.search import PlannerOptions, Pose, warm_up
+from planner.hybrid_astar.search import RS_CELL_M, PlannerOptions, Pose, warm_up
 from planner.occupancy import OccupancyGrid
 from planner.result import PlanResult
 from planner.robot import RobotProfile
@@ -31,6 +32,8 @@ class PlanQuery:
     options: PlannerOptions
     termination: Termination = field(default_factory=Termination)
 
+
+DEFAULT_OPTIONS = PlannerOptions()
 
 #: most states a plan result may hold (~100 bytes of JSON each: a 20 MB reply)
 MAX_RESULT_STATES = 200_000
@@ -73,14 +76,32 @@ def execute_plan(query: PlanQuery, grid: OccupancyGrid, robot: RobotProfile) -> 
     typed planning errors."""
     check_on_map(query, grid)
     check_result_size(query, grid)
-    warm_up()  # one-off compilation and the map's preprocessing (cached per map) happen before the clock
-    planner_for(grid, robot, query.options)
-    t0 = time.perf_counter()
-    result = plan_path(grid, robot, query.start, query.goal, query.options, query.termination)
+    warm_up()  # one-off compilation happens before the clock
+    options = query.options
+    reverse = robot.reversible if options.allow_reverse is None else options.allow_reverse
+    if reverse and options.n_yaw_bins == DEFAULT_OPTIONS.n_yaw_bins:
+        # one-off per built-in robot, like compilation (cached per process): before the clock
+        reeds_shepp_table(robot.min_turning_radius_m, options.n_yaw_bins, RS_CELL_M)
+    clock = query.termination.start()
+    if reverse:
+        # request-sized precomputation is inside the limit and stops at it: the Reeds–Shepp table for the
+        # request's own options.n_yaw_bins (≈ 6 s at 720 bins; cached per process once built)
+        reeds_shepp_table(robot.min_turning_radius_m, options.n_yaw_bins, RS_CELL_M, clock=clock)
+    # the map's preprocessing (distance transform; its size is the map's, bounded where the map is accepted) is
+    # cached per map and not counted
+    t_map = time.perf_counter()
+    planner_for(grid, robot, options)
+    map_s = time.perf_counter() - t_map
+    limit = query.termination.time_limit_s
+    remaining = limit - (clock.elapsed_s() - map_s)
+    if remaining <= 0:
+        raise PlannerTimedOut(f"the time limit of {limit:g} s ran out before the search started",
+                              planning_time_s=limit - remaining)
+    result = plan_path(grid, robot, query.start, query.goal, options, replace(query.termination,
+                                                                             time_limit_s=remaining))
     # the limit covers the whole plan (smoothing, the exact re-checks, a mesh's fcl check), not only the search,
     # at every door alike
-    elapsed = time.perf_counter() - t0
-    limit = query.termination.time_limit_s
+    elapsed = clock.elapsed_s() - map_s
     if elapsed > limit:
         raise PlannerTimedOut(f"the plan took {elapsed:.3g} s, over its time limit of {limit:g} s",
                               planning_time_s=elapsed, expansions=result.expansions)

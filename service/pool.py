@@ -6,11 +6,15 @@ and fails every job in it), each worker has its own pipe and its own supervising
 
 * a worker that dies, idle or busy, is logged and replaced (spawned and warmed) at once; only the job
   that was on it fails, with :class:`WorkerDied`; :attr:`SupervisedPool.ready_workers` counts the warmed
-  workers, so readiness can say "not ready" while the pool is short;
+  workers that are alive and not stopped (``SIGSTOP``) or overrunning, so readiness says "not ready" while
+  the pool is short;
+* a worker acknowledges each job before it runs it, so a job handed to a worker that had died (or hung)
+  while idle, before the supervisor saw it, is put back in the queue and runs on the replacement
+  (at most ``MAX_HANDOVERS`` times) instead of failing;
 * a job may carry a hard deadline (``submit_job(..., deadline_s=)``): a worker still busy with it
-  ``KILL_GRACE_S`` after it is killed and replaced, and the job fails with
-  :class:`~planner.errors.PlannerTimedOut` (an answer that comes within the grace stands: the plan job
-  checks its own deadline and answers the timeout itself);
+  ``KILL_GRACE_S`` after it is killed and replaced, and the job fails with :class:`WorkerHung` (a server
+  fault, answered 503: every job checks its own deadline through :class:`planner.termination.Termination`
+  and answers the timeout itself, so only a job that could not stop, or a stopped process, meets this);
 * :meth:`SupervisedPool.cancel` ends a job: a queued one is dropped, a running one is asked to stop
   through a shared flag (the planner polls it between search chunks, see :func:`service.jobs.cancelled`)
   and its worker is killed and replaced if it has not stopped ``KILL_GRACE_S`` later;
@@ -35,7 +39,8 @@ from dataclasses import dataclass, field
 from multiprocessing.connection import Connection, wait
 from typing import Any
 
-from planner.errors import PlannerCancelled, PlannerTimedOut
+from planner.errors import PlannerCancelled
+from service.outcome import WorkerLost
 
 log = logging.getLogger(__name__)
 
@@ -45,10 +50,30 @@ KILL_GRACE_S = 1.0
 POLL_S = 0.1
 #: longest a new worker may take to start and warm up before it is replaced again (s)
 START_TIMEOUT_S = 600.0
+#: longest an idle worker may take to acknowledge a job it was sent before it is taken for hung (s)
+ACK_TIMEOUT_S = 30.0
+#: how many times a job that never started (its worker was found dead or hung) is handed to another worker
+MAX_HANDOVERS = 3
 
 
-class WorkerDied(Exception):
+class WorkerDied(WorkerLost):
     """The worker process running a job died (killed, crashed) before answering."""
+
+
+class WorkerHung(WorkerLost):
+    """The worker process running a job did not stop at the job's deadline (stopped, or stuck where it
+    cannot look at its clock) and was killed."""
+
+
+def _stopped(pid: int | None) -> bool:
+    """True when process ``pid`` is stopped (``SIGSTOP``, traced): Linux ``/proc``; False where unknown."""
+    if pid is None:
+        return False
+    try:
+        with open(f"/proc/{pid}/stat", "rb") as stat:
+            return stat.read().rsplit(b")", 1)[1].split()[0] in (b"T", b"t")
+    except (OSError, IndexError):
+        return False
 
 
 @dataclass(eq=False)
@@ -59,6 +84,7 @@ class _Task:
     deadline_s: float | None = None  # seconds of running time, counted from when a worker takes it
     cancel_requested: bool = False
     started: float | None = field(default=None)
+    handovers: int = 0  # times it was sent to a worker that turned out dead or hung before taking it
     queued_at: float = field(default_factory=time.monotonic)
 
     @property
@@ -93,6 +119,10 @@ def _worker_main(conn: Connection, cancel_flag: Any, initializer: Callable[[], N
             return
         fn, args = message
         try:
+            conn.send(("started", None))
+        except (EOFError, OSError):
+            return
+        try:
             reply: tuple[str, Any] = ("ok", fn(*args))
         except BaseException as exc:
             reply = ("error", exc)
@@ -114,6 +144,7 @@ class _Worker:
         self.conn: Connection | None = None
         self.cancel_flag = pool._ctx.Value("b", 0, lock=False)
         self.ready = False
+        self.overrunning = False  # its job is past its deadline: not ready until it answers or is replaced
         self.task: _Task | None = None
         self.thread = threading.Thread(target=self._run, name=f"sphereplan-worker-{index}", daemon=True)
 
@@ -148,6 +179,7 @@ class _Worker:
         proc, conn = self.proc, self.conn
         self.proc = self.conn = None
         self.ready = False
+        self.overrunning = False
         if conn is not None:
             conn.close()
         if proc is not None:
@@ -158,16 +190,25 @@ class _Worker:
     def alive(self) -> bool:
         return self.proc is not None and self.proc.is_alive()
 
+    def healthy(self) -> bool:
+        """Warmed, alive, not stopped and not overrunning a job: can take (or is doing) useful work."""
+        return (self.ready and self.alive() and not self.overrunning
+                and not _stopped(self.proc.pid if self.proc is not None else None))
+
     # ---------------------------------------------------------------- supervision
 
     def _run(self) -> None:
         failures = 0
         while not self.pool._closed:
+            if self.proc is not None and not self.alive():
+                log.error("worker %d (pid %s) died while idle (exit code %s); replacing it",
+                          self.index, self.proc.pid, self.proc.exitcode)
+                self._kill()
+            elif self.proc is not None and _stopped(self.proc.pid):
+                log.error("worker %d (pid %s) is stopped while idle; killing and replacing it", self.index,
+                          self.proc.pid)
+                self._kill()
             if not self.alive():
-                if self.proc is not None:
-                    log.error("worker %d (pid %s) died while idle (exit code %s); replacing it",
-                              self.index, self.proc.pid, self.proc.exitcode)
-                    self._kill()
                 if not self._spawn():
                     failures += 1
                     time.sleep(min(5.0, 0.2 * failures))
@@ -183,12 +224,17 @@ class _Worker:
     def _execute(self, task: _Task) -> None:
         assert self.conn is not None and self.proc is not None
         self.cancel_flag.value = 0
-        task.started = time.monotonic()
         try:
             self.conn.send((task.fn, task.args))
         except Exception as exc:  # unpicklable arguments, or the worker just died
-            self._finish(task, exc=exc if self.alive() else WorkerDied("the worker process died"))
+            if self.alive():
+                self._finish(task, exc=exc)
+            else:
+                self._hand_back(task, "died while idle")
             return
+        if not self._await_start(task):
+            return
+        task.started = time.monotonic()
         stop_at: float | None = None  # when the worker is killed if it has not answered
         reason: BaseException | None = None
         while True:
@@ -199,7 +245,9 @@ class _Worker:
                     and time.monotonic() > task.started + task.deadline_s):
                 # no cancel flag here: the job's own deadline check answers a timeout if it can, in the grace
                 stop_at = time.monotonic() + KILL_GRACE_S
-                reason = PlannerTimedOut(f"the job did not finish within its time limit of {task.deadline_s:g} s")
+                self.overrunning = True
+                reason = WorkerHung(f"the worker did not stop at the job's deadline ({task.deadline_s:g} s); "
+                                    "it was replaced")
             if self.pool._closed:
                 self._finish(task, exc=RuntimeError("the pool is shut down"))
                 return
@@ -227,13 +275,53 @@ class _Worker:
                 log.error("worker %d (pid %s) died while running a job (exit code %s); replacing it",
                           self.index, self.proc.pid, self.proc.exitcode)
                 self._kill()
-                self._finish(task, exc=reason if isinstance(reason, PlannerTimedOut) else
-                             WorkerDied("the worker process running this job died"))
+                self._finish(task, exc=reason if isinstance(reason, WorkerHung) else
+                             WorkerDied("a worker process died while running this job"))
                 return
+
+    def _await_start(self, task: _Task) -> bool:
+        """Wait for the worker to acknowledge ``task``; hand the task back to the queue (False) if the worker
+        turns out dead or does not answer within ``ACK_TIMEOUT_S`` (then it is killed)."""
+        assert self.conn is not None and self.proc is not None
+        end = time.monotonic() + ACK_TIMEOUT_S
+        while not self.pool._closed:
+            ready = wait([self.conn, self.proc.sentinel], timeout=POLL_S)
+            if self.conn in ready:
+                try:
+                    kind, _ = self.conn.recv()
+                except (EOFError, OSError):
+                    self._hand_back(task, "died while idle")
+                    return False
+                if kind == "started":
+                    return True
+            if ready and not self.alive():
+                self._hand_back(task, "died while idle")
+                return False
+            if time.monotonic() > end or _stopped(self.proc.pid):
+                self._hand_back(task, "hung while idle")
+                return False
+        self._finish(task, exc=RuntimeError("the pool is shut down"))
+        return False
+
+    def _hand_back(self, task: _Task, what: str) -> None:
+        """The worker took no part in ``task`` (it was dead or hung before it acknowledged it): replace the
+        worker and queue the task again, ahead of the others (it keeps its place by deadline)."""
+        assert self.proc is not None
+        log.error("worker %d (pid %s) %s (exit code %s); replacing it and handing its job to the next worker",
+                  self.index, self.proc.pid, what, self.proc.exitcode)
+        self._kill()
+        with self.pool._cv:
+            self.task = None
+        task.handovers += 1
+        if task.handovers > MAX_HANDOVERS:
+            self._finish(task, exc=WorkerDied(f"{task.handovers} worker processes died before running this job"))
+            return
+        self.pool._requeue(task)
 
     def _finish(self, task: _Task, result: Any = None, exc: BaseException | None = None) -> None:
         with self.pool._cv:
             self.task = None
+            self.overrunning = False
         if task.future.done():
             return
         try:
@@ -264,8 +352,9 @@ class SupervisedPool(Executor):
 
     @property
     def ready_workers(self) -> int:
-        """Workers started, warmed and alive (fewer than asked for while one is being replaced)."""
-        return sum(1 for w in self._workers if w.ready and w.alive())
+        """Workers started, warmed, alive, not stopped and not overrunning a job (fewer than asked for while
+        one is being replaced or is hung)."""
+        return sum(1 for w in self._workers if w.healthy())
 
     @property
     def size(self) -> int:
@@ -295,7 +384,7 @@ class SupervisedPool(Executor):
 
     def submit_job(self, fn: Callable[..., Any], args: tuple[Any, ...], deadline_s: float | None = None) -> Future[Any]:
         """Queue ``fn(*args)``; with ``deadline_s`` its worker is killed if it runs longer than that plus
-        ``KILL_GRACE_S`` (the job then fails with :class:`PlannerTimedOut`)."""
+        ``KILL_GRACE_S`` (the job then fails with :class:`WorkerHung`)."""
         future: Future[Any] = Future()
         task = _Task(fn, args, future, deadline_s)
         with self._cv:
@@ -319,10 +408,21 @@ class SupervisedPool(Executor):
             while self._queue:
                 task = min(self._queue, key=lambda t: t.due)  # earliest deadline first (the queue is short)
                 self._queue.remove(task)
-                if task.future.set_running_or_notify_cancel():
+                if task.handovers or task.future.set_running_or_notify_cancel():
                     worker.task = task
                     return task
         return None
+
+    def _requeue(self, task: _Task) -> None:
+        with self._cv:
+            if self._closed:
+                closed = True
+            else:
+                closed = False
+                self._queue.append(task)
+                self._cv.notify()
+        if closed and not task.future.done():
+            task.future.set_exception(RuntimeError("the pool is shut down"))
 
     def cancel(self, future: Future[Any]) -> None:
         """End the job of ``future``: a queued one never runs, a running one is stopped (its future then
@@ -333,7 +433,10 @@ class SupervisedPool(Executor):
                 return
             if task in self._queue:
                 self._queue.remove(task)
-                future.cancel()
+                if task.handovers:  # already marked running: end it as cancelled
+                    future.set_exception(PlannerCancelled("the job was cancelled"))
+                else:
+                    future.cancel()
                 return
             task.cancel_requested = True
 
@@ -346,7 +449,10 @@ class SupervisedPool(Executor):
             queued, self._queue = list(self._queue), deque()
             self._cv.notify_all()
         for task in queued:
-            task.future.cancel()
+            if task.handovers:
+                task.future.set_exception(RuntimeError("the pool is shut down"))
+            else:
+                task.future.cancel()
         for worker in self._workers:
             conn = worker.conn
             if conn is not None and worker.task is None:

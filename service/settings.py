@@ -7,6 +7,7 @@ Zenoh node read them. The module imports nothing heavy, so the CLI can read the 
 from __future__ import annotations
 
 import math
+import re
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -16,6 +17,8 @@ from planner.errors import InvalidInput
 MAX_INLINE_CELLS = 250_000
 #: largest time limit a request may ask for (s); a server may set a lower one
 MAX_TIME_LIMIT_S = 60.0
+#: one Zenoh key chunk naming robot ids (``*``, ``r1``, ``east-$*``); never ``**`` or a ``/``
+ROBOT_PATTERN = re.compile(r"\*|(?:[A-Za-z0-9_.-]|\$\*)+")
 
 
 @dataclass(frozen=True)
@@ -28,8 +31,9 @@ class ServiceSettings:
     Zenoh payloads. ``worker_memory_mb`` is each worker process's address-space ceiling (0: none): a job
     that reaches it is answered as bad input instead of growing until the machine kills something.
     ``max_job_s`` is the wall-clock deadline of a job without a time limit of its own (everything but a
-    plan, whose deadline is its time limit). ``http_token``, when set, is the bearer token every HTTP
-    route but the health probes requires.
+    plan, whose deadline is its time limit). ``http_token``, when set, is the token every door requires
+    (:mod:`service.auth`): the bearer token of every HTTP route but the health probes, and the attachment of
+    every Zenoh query and pose/goal put.
     """
 
     maps_dir: Path | None = None
@@ -46,6 +50,9 @@ class ServiceSettings:
     zenoh: bool = True
     zenoh_config: Path | None = None
     zenoh_listen: str = "tcp/127.0.0.1:7447"
+    #: robot ids whose pose/goal topics this instance plans, as Zenoh key chunks (``*`` every robot, ``r1``, or
+    #: ``east-$*`` the ids starting ``east-``): instances serving one fleet take disjoint sets
+    zenoh_robots: tuple[str, ...] = ("*",)
     #: ROS 2 over Zenoh in rmw_zenoh's format (service/ros2_zenoh.py): on/off, domain, namespace of the
     #: topics, the map goals are planned on until a nav_msgs/OccupancyGrid arrives on <ns>/map, the robot
     ros2: bool = False
@@ -72,6 +79,8 @@ class ServiceSettings:
         need(self.retry_after_s >= 1, "retry_after_s", f"must be ≥ 1, got {self.retry_after_s}")
         need(0 <= self.ros2_domain_id <= 232, "ros2_domain_id", f"must be in [0, 232], got {self.ros2_domain_id}")
         need(not self.ros2 or self.zenoh, "ros2", "needs the Zenoh node (drop --no-zenoh)")
+        need(bool(self.zenoh_robots) and all(ROBOT_PATTERN.fullmatch(p) for p in self.zenoh_robots), "zenoh_robots",
+             f"each must be one Zenoh key chunk (letters, digits, _ - . * $*), got {self.zenoh_robots}")
         if self.zenoh_config is not None:
             need(Path(self.zenoh_config).is_file(), "zenoh_config", f"{self.zenoh_config} is not a file")
 

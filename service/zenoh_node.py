@@ -3,7 +3,8 @@
 Key expressions (payloads are the same JSON as the HTTP API, encoding ``application/json``):
 
 * queryable ``sphereplan/plan`` — payload a :class:`~service.wire.PlanRequest`; replies the plan result
-  with ``reply``, or the error / failed-result JSON with ``reply_err``. Queries go to the process pool:
+  with ``reply``, or the error / failed-result JSON with ``reply_err``. Queryables are declared complete,
+  so a query with the default target reaches one instance however many serve. Queries go to the process pool:
   the callback only validates and submits, the reply is sent when the job finishes, so a slow plan
   never blocks other queries. Every query is finalised (``drop``) once answered.
 * queryables ``sphereplan/reconfigure`` and ``sphereplan/simulate`` — payloads a
@@ -19,7 +20,13 @@ Key expressions (payloads are the same JSON as the HTTP API, encoding ``applicat
   superseded goal publishes ``superseded`` and no path.
 * Every payload is bounded like an HTTP body (``max_body_bytes``, checked by length before it is read)
   and a malformed or too deeply nested one is answered with the error JSON naming ``body`` (a query's
-  ``reply_err``; on the topics an ``invalid_pose`` / ``invalid_goal`` status).
+  ``reply_err``; on the topics an ``invalid_pose`` / ``invalid_goal`` status). A large one is parsed in a
+  parse process (:mod:`service.limits`), robot samples are handled off the callback thread in order per
+  robot, so one slow payload holds no other.
+* With a token (``--token-file``, :mod:`service.auth`) every query and pose/goal put must carry the
+  attachment ``Bearer <token>``: a query without it is answered ``reply_err`` naming ``attachment``, a sample
+  without it is dropped. ``settings.zenoh_robots`` (``--robots``) says which robots' topics this instance
+  plans, so that instances serving one fleet each plan a disjoint set.
 * a liveliness token ``sphereplan/planner/<zid>`` announces the planner while it runs.
 
 Default session: peer mode, listening on ``tcp/127.0.0.1:7447`` only, multicast scouting off, so the
@@ -38,11 +45,13 @@ from concurrent.futures import Future
 from typing import Any, TypeVar
 
 import zenoh
-from pydantic import BaseModel, ValidationError
+from pydantic import BaseModel
 
 from planner.errors import InvalidInput, StartOutsideMap
+from service.auth import token_ok
 from service.core import PlanningService
-from service.outcome import Outcome, error_outcome, outcome_of_exception
+from service.limits import SMALL_BODY_BYTES, KeyedSerialExecutor, ParseGate, parse_json_model
+from service.outcome import Outcome, Unauthorized, error_outcome, outcome_of_exception
 from service.settings import ServiceSettings
 from service.wire import (
     GoalMessage,
@@ -51,7 +60,6 @@ from service.wire import (
     PoseMessage,
     ReconfigureIn,
     SimulateRequest,
-    invalid_input,
 )
 from service.zenoh_entities import undeclare_all
 
@@ -79,28 +87,25 @@ def node_config(settings: ServiceSettings) -> zenoh.Config:
     return default_config(settings.zenoh_listen)
 
 
-def parse(model: type[M], payload: zenoh.ZBytes | None, limit: int) -> M:
-    """Validate a JSON payload against a wire model; raises :class:`InvalidInput` naming the field.
-
-    A payload over ``limit`` bytes (the HTTP body limit) is refused by its length, before it is copied or
-    parsed; one nested too deeply for the parser is refused like malformed JSON."""
+def check_size(payload: zenoh.ZBytes | None, limit: int) -> int:
+    """The payload's length; :class:`InvalidInput` naming ``body`` when it is missing or over ``limit`` bytes
+    (the HTTP body limit), checked before it is copied or parsed."""
     if payload is None:
         raise InvalidInput("body", "a JSON payload is required")
     size = len(payload)
     if size > limit:
         raise InvalidInput("body", f"payload of {size} bytes; this server accepts at most {limit}")
-    try:
-        data = json.loads(payload.to_bytes())
-    except (UnicodeDecodeError, json.JSONDecodeError) as exc:
-        raise InvalidInput("body", f"malformed JSON: {exc}") from None
-    except RecursionError:
-        raise InvalidInput("body", "malformed JSON: nested too deeply") from None
-    try:
-        return model.model_validate(data)
-    except ValidationError as exc:
-        raise invalid_input(exc.errors()) from None
-    except RecursionError:
-        raise InvalidInput("body", "nested too deeply") from None
+    return size
+
+
+def parse(model: type[M], payload: zenoh.ZBytes | None, limit: int) -> M:
+    """Validate a JSON payload against a wire model; raises :class:`InvalidInput` naming the field.
+
+    A payload over ``limit`` bytes is refused by its length, before it is copied or parsed; one nested too
+    deeply for the parser is refused like malformed JSON."""
+    check_size(payload, limit)
+    assert payload is not None
+    return parse_json_model(model, payload.to_bytes(), limit)
 
 
 def refusal(exc: Exception, where: str) -> Outcome:
@@ -116,7 +121,7 @@ class ZenohNode:
     undeclares and closes it."""
 
     def __init__(self, service: PlanningService, settings: ServiceSettings | None = None,
-                 config: zenoh.Config | None = None) -> None:
+                 config: zenoh.Config | None = None, parse_gate: ParseGate | None = None) -> None:
         self.service = service
         self.settings = settings or service.settings
         self._config = config
@@ -127,6 +132,11 @@ class ZenohNode:
         self._goal_ids: dict[str, int] = {}
         self.ros2: Any = None  # the rmw_zenoh face (service.ros2_zenoh), with settings.ros2
         self._plans: dict[str, Future[Outcome]] = {}  # robot → the plan in flight for its newest goal
+        self._token = self.settings.http_token
+        # large payloads are parsed in separate processes (the HTTP app's, when it runs the node)
+        self._own_gate = parse_gate is None
+        self._parse = parse_gate or ParseGate(retry_after_s=self.settings.retry_after_s)
+        self._topics = KeyedSerialExecutor()  # robot samples: off the callback, in order per robot
         # one entry per queryable capability: key suffix → (request model, submit)
         self.queryables: dict[str, tuple[type[BaseModel], Callable[[Any], Future[Outcome]]]] = {
             "plan": (PlanRequest, service.submit_plan),
@@ -141,11 +151,15 @@ class ZenohNode:
         self.session = session
         for name, (model, submit) in self.queryables.items():
             key = f"{PREFIX}/{name}"
-            self._entities.append(session.declare_queryable(key, self._query_handler(key, model, submit)))
-        # one subscriber for both topics, so that a pose published just before a goal is seen first
-        # (callbacks of separate subscribers run on separate threads); our own puts are not delivered
-        self._entities.append(session.declare_subscriber(f"{PREFIX}/*/*", self._on_robot_sample,
-                                                         allowed_origin=zenoh.Locality.REMOTE))
+            # complete: a query with the default target (BEST_MATCHING) goes to one instance however many serve
+            self._entities.append(session.declare_queryable(key, self._query_handler(key, model, submit),
+                                                            complete=True))
+        # one subscriber per robot pattern for both topics, so that a pose published just before a goal is seen
+        # first (callbacks of separate subscribers run on separate threads); our own puts are not delivered.
+        # Instances serving one fleet take disjoint patterns, so each goal is planned once.
+        for pattern in self.settings.zenoh_robots:
+            self._entities.append(session.declare_subscriber(f"{PREFIX}/{pattern}/*", self._on_robot_sample,
+                                                             allowed_origin=zenoh.Locality.REMOTE))
         self._entities.append(session.liveliness().declare_token(f"{PREFIX}/planner/{session.zid()}"))
         log.info("zenoh node %s up: queryables %s", session.zid(), ", ".join(self.queryables))
         if self.settings.ros2:
@@ -164,20 +178,49 @@ class ZenohNode:
             self.ros2.close()
         undeclare_all(self._entities)
         session.close()
+        if self._own_gate:
+            self._parse.close()
+        self._topics.close()
 
     # ------------------------------------------------------------------------------ queries
 
     def _query_handler(self, key: str, model: type[BaseModel],
                        submit: Callable[[Any], Future[Outcome]]) -> Callable[[zenoh.Query], None]:
-        def on_query(query: zenoh.Query) -> None:
+        limit = self.settings.max_body_bytes
+
+        def handle(query: zenoh.Query, parse: Callable[[], Any]) -> None:
             try:
-                future = submit(parse(model, query.payload, self.settings.max_body_bytes))
+                future = submit(parse())
             except Exception as exc:
                 self._answer(query, key, refusal(exc, f"query on {key}"))
                 return
             future.add_done_callback(lambda done: self._answer(query, key, done.result()))
 
+        def on_query(query: zenoh.Query) -> None:
+            if not self._authorised(query.attachment):
+                self._answer(query, key, self._unauthorised())
+                return
+            try:
+                size = check_size(query.payload, limit)
+                assert query.payload is not None
+                raw = query.payload.to_bytes()
+                if size <= SMALL_BODY_BYTES:
+                    handle(query, lambda: parse_json_model(model, raw, limit))
+                else:  # a large payload is parsed in a parse process: it holds no other query or sample
+                    parsed = self._parse.submit(model, raw, limit)
+                    parsed.add_done_callback(lambda done: handle(query, done.result))
+            except Exception as exc:
+                self._answer(query, key, refusal(exc, f"query on {key}"))
+
         return on_query
+
+    def _authorised(self, attachment: zenoh.ZBytes | None) -> bool:
+        return token_ok(None if attachment is None else attachment.to_bytes(), self._token)
+
+    @staticmethod
+    def _unauthorised() -> Outcome:
+        return error_outcome(Unauthorized, "this server needs the attachment 'Bearer <token>' on every query and "
+                                           "put", "attachment")
 
     def _answer(self, query: zenoh.Query, key: str, outcome: Outcome) -> None:
         """Reply (or reply_err) and finalise the query, whatever happens."""
@@ -221,7 +264,18 @@ class ZenohNode:
         self._publish(robot_id, "status", status)
 
     def _on_robot_sample(self, sample: zenoh.Sample) -> None:
+        """The subscriber's callback: check the token, then handle the sample off the callback thread, in order
+        per robot (a large goal parses while other robots' samples go on)."""
         topic = str(sample.key_expr).rsplit("/", 1)[-1]
+        if topic not in ("pose", "goal"):
+            return
+        if not self._authorised(sample.attachment):
+            log.warning("dropped a %s on %s without a valid token attachment", sample.kind, sample.key_expr)
+            return
+        if not self._topics.submit(self._robot_id(sample), lambda: self._handle_robot_sample(sample, topic)):
+            log.warning("dropped a sample on %s: too many samples waiting", sample.key_expr)
+
+    def _handle_robot_sample(self, sample: zenoh.Sample, topic: str) -> None:
         try:
             if topic == "pose":
                 self._on_pose(sample)

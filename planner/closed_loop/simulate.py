@@ -40,6 +40,10 @@ from planner.kinematics import SphereState
 from planner.maps.clearance import footprint_clearance
 from planner.occupancy import OccupancyGrid
 from planner.robot import RobotProfile, load_robot
+from planner.termination import Termination
+
+#: control steps between two looks at the wall clock (termination)
+CHECK_EVERY = 20
 
 
 @dataclass(frozen=True)
@@ -107,11 +111,13 @@ def simulate_plan(
     seed: int = 0,
     noise: str | Disturbances = "default",
     options: SimulationOptions | None = None,
+    termination: Termination | None = None,
 ) -> dict[str, Any]:
     """Roll ``plan_json`` (plan result with ``states``) on ``grid`` in closed loop; return the SIM.json dict.
 
     ``robot`` defaults to the plan's ``robot.name``; ``noise`` is ``"none"``, ``"default"`` or a
-    :class:`Disturbances`; ``seed`` seeds every disturbance.
+    :class:`Disturbances`; ``seed`` seeds every disturbance. ``termination`` bounds the wall clock (and may
+    cancel): checked every ``CHECK_EVERY`` control steps (``options.time_limit_s`` is simulated time).
     """
     opts = options or SimulationOptions()
     if not isinstance(plan_json, dict) or "states" not in plan_json:
@@ -172,7 +178,10 @@ def simulate_plan(
     wheel_dist = 0.0
     k = 0
     reached = False
+    clock = termination.start() if termination is not None else None
     while True:
+        if clock is not None and k % CHECK_EVERY == 0:
+            clock.check("the simulation")
         t = k * dt
         # 1. sensors → localisation (eq. 2, eq. 3)
         imu_now = imu(state.roll) if k > 0 else imu_prev

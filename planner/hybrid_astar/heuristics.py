@@ -14,12 +14,17 @@
 from __future__ import annotations
 
 import math
-from functools import lru_cache
+from collections import OrderedDict
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numba import njit
 
+from planner.errors import PlannerCancelled, PlannerTimedOut
 from planner.hybrid_astar.heap import heap_pop, heap_push
+
+if TYPE_CHECKING:
+    from planner.termination import Clock
 
 # Worst-case ratio of the 16-connected grid metric to Euclidean distance.
 SIXTEEN_CONNECTED_RATIO = 1.0 / math.cos(math.atan2(1.0, 2.0) / 2.0)
@@ -121,16 +126,36 @@ def _dijkstra16(mult: np.ndarray, gx: int, gy: int, cell_m: float, sx: int, sy: 
     return dist
 
 
-@lru_cache(maxsize=4)
-def reeds_shepp_table(rho: float, n_yaw: int = 72, cell_m: float = 0.1, half_width_m: float = 0.0) -> np.ndarray:
+_RS_TABLES: OrderedDict[tuple[float, int, float, float], np.ndarray] = OrderedDict()
+_RS_TABLES_KEPT = 4
+
+
+def reeds_shepp_table(rho: float, n_yaw: int = 72, cell_m: float = 0.1, half_width_m: float = 0.0,
+                      clock: Clock | None = None) -> np.ndarray:
     """Reeds–Shepp distance to a goal at the origin (heading 0), from OMPL's ``ReedsSheppStateSpace``.
 
     Used as the non-holonomic heuristic when reversing is allowed (Dubins is not a lower bound then).
     Sampled every ``cell_m`` over ±``half_width_m`` (default max(3 m, 3ρ)) and every 2π/``n_yaw``, then
     each bin holds the minimum over its 8 corner samples less one cell, so a lookup at any pose inside the
     bin does not exceed OMPL's distance there (checked on random poses in the tests). Shape (n_yaw, 2n, 2n) with
-    n = half_width / cell; built once per (ρ, bins) in a process (≈ 0.6 s).
+    n = half_width / cell; built once per (ρ, bins) in a process (≈ 0.6 s at 72 bins, ten times that at 720).
+    Its size is the request's (``n_yaw``), so with ``clock`` the build stops at the clock's deadline or cancel
+    (:class:`~planner.errors.PlannerTimedOut` / :class:`~planner.errors.PlannerCancelled`) and keeps nothing.
     """
+    key = (float(rho), int(n_yaw), float(cell_m), float(half_width_m))
+    cached = _RS_TABLES.get(key)
+    if cached is not None:
+        _RS_TABLES.move_to_end(key)
+        return cached
+    table = _build_reeds_shepp_table(rho, n_yaw, cell_m, half_width_m, clock)
+    _RS_TABLES[key] = table
+    while len(_RS_TABLES) > _RS_TABLES_KEPT:
+        _RS_TABLES.popitem(last=False)
+    return table
+
+
+def _build_reeds_shepp_table(rho: float, n_yaw: int, cell_m: float, half_width_m: float,
+                             clock: Clock | None) -> np.ndarray:
     from ompl import base as ob
 
     half = half_width_m or max(3.0, 3.0 * rho)
@@ -143,6 +168,13 @@ def reeds_shepp_table(rho: float, n_yaw: int = 72, cell_m: float = 0.1, half_wid
     coords = (np.arange(2 * n + 1) - n) * cell_m
     samples = np.empty((n_yaw + 1, 2 * n + 1, 2 * n + 1))
     for k in range(n_yaw + 1):
+        if clock is not None:
+            if clock.cancelled():
+                raise PlannerCancelled("cancelled while building the Reeds–Shepp heuristic table")
+            if clock.expired():
+                raise PlannerTimedOut(f"the time limit of {clock.time_limit_s:g} s ran out while building the "
+                                      f"Reeds–Shepp heuristic table for {n_yaw} yaw bins (options.n_yaw_bins)",
+                                      planning_time_s=clock.elapsed_s())
         yaw = -math.pi + 2.0 * math.pi * k / n_yaw
         state.setYaw(yaw if yaw < math.pi else -math.pi)  # OMPL's SO(2) is [−π, π)
         for j, y in enumerate(coords):

@@ -59,6 +59,8 @@ from planner.termination import Clock, Termination
 log = logging.getLogger(__name__)
 
 RS_CELL_M = 0.1  # sampling of the Reeds–Shepp heuristic table (m)
+MAX_STEP_M = 10.0  # longest expansion a request may ask for (options.step_m): its collision samples grow with it
+CHUNK_SAMPLES = 200_000  # collision samples per compiled chunk at most, so the clock is polled at least that often
 CLEARANCE_REACH_M = 2.0  # the reported min_clearance_m is capped here (farther obstacles do not matter)
 HEURISTIC_CACHE_SIZE = 8  # holonomic tables kept per planner (one per goal cell)
 GOAL_CHECK_AFTER = 20_000  # expansions without a path before the goal's surroundings are searched (fail fast)
@@ -114,7 +116,7 @@ class PlannerOptions:
         need(8 <= self.n_yaw_bins <= 720, "n_yaw_bins", "must be in [8, 720]")
         need(self.n_roll_bins == 0 or (3 <= self.n_roll_bins <= self.n_rolls and self.n_roll_bins % 2 == 1),
              "n_roll_bins", "must be 0 (one per held roll) or an odd number in [3, n_rolls]")
-        need(self.step_m >= 0, "step_m", "must be ≥ 0 (0 = automatic)")
+        need(0 <= self.step_m <= MAX_STEP_M, "step_m", f"must be in [0, {MAX_STEP_M:g}] m (0 = automatic)")
         need(1 <= self.n_circles <= 16, "n_circles", "must be in [1, 16]")
         need(self.goal_tolerance_m > 0, "goal_tolerance_m", "must be > 0")
         need(self.goal_tolerance_yaw_rad > 0, "goal_tolerance_yaw_rad", "must be > 0")
@@ -154,7 +156,11 @@ class PlannerOptions:
                     raise InvalidInput(f"options.{key}", f"must be an integer, got {value!r}")
             elif isinstance(value, bool) or not isinstance(value, int | float):
                 raise InvalidInput(f"options.{key}", f"must be a number, got {value!r}")
-            values[key] = type(default)(value)
+            try:
+                values[key] = type(default)(value)
+            except OverflowError:  # an integer too large for a float (1 followed by 400 zeros)
+                raise InvalidInput(f"options.{key}", f"must be a finite number, got an integer of "
+                                                     f"{len(str(abs(value)))} digits") from None
         return cls(**values)
 
 
@@ -356,6 +362,13 @@ class HybridAStar:
         yaw_bin = 2 * math.pi / self.options.n_yaw_bins
         return max(math.sqrt(2) * self.grid.resolution_m, self.robot.min_turning_radius_m * yaw_bin)
 
+    def chunk_expansions(self, o: PlannerOptions) -> int:
+        """Expansions per compiled chunk: ``o.chunk_expansions``, fewer when each expansion samples many points
+        (a long ``step_m``), so the clock is polled after at most ``CHUNK_SAMPLES`` collision samples."""
+        per_expansion = self.options.n_rolls * (2 if self.reverse else 1) * (
+            self.resolved_step_m / (0.5 * self.grid.resolution_m) + 1)
+        return max(1, min(o.chunk_expansions, int(CHUNK_SAMPLES / per_expansion)))
+
     def pose_margin(self, pose: Pose) -> float:
         """Footprint margin (m) at a pose: ≥ 0 means free (circles first, the exact polygon where they touch)."""
         return float(self.clearance.footprint_margins(self.footprint, self.polygon, np.array([pose]))[0])
@@ -484,7 +497,7 @@ class HybridAStar:
                 tried_from = best
                 if run.reeds_shepp_shot(best):
                     return
-            status = run.step(min(o.chunk_expansions, cap - run.expansions))
+            status = run.step(min(self.chunk_expansions(o), cap - run.expansions))
             if status == core.FOUND:
                 return
             if status == core.EXHAUSTED:
@@ -588,7 +601,7 @@ class HybridAStar:
         heur = self.holonomic(back_goal[:2], back_start[:2])
         run = _Search(self, back_start, back_goal, heur, o, self.reverse)
         while run.expansions < GOAL_CHECK_BUDGET and not clock.expired():
-            status = run.step(min(o.chunk_expansions, GOAL_CHECK_BUDGET - run.expansions))
+            status = run.step(min(self.chunk_expansions(o), GOAL_CHECK_BUDGET - run.expansions))
             if status == core.EXHAUSTED:
                 return run.expansions
             if status == core.FOUND:

@@ -37,7 +37,8 @@ def default_maps_dir() -> Path:
 
 
 def _image_size(yaml_path: Path) -> tuple[int, int] | None:
-    """(width, height) in pixels of a map YAML's image, read from the header only; None if unreadable."""
+    """(width, height) in pixels of a map YAML's image, read from the header only; None if unreadable;
+    ValueError if the header declares an image too large for Pillow to decode (a decompression bomb)."""
     try:
         doc = yaml.safe_load(yaml_path.read_text())
         image = Path(str(doc["image"]))
@@ -45,6 +46,8 @@ def _image_size(yaml_path: Path) -> tuple[int, int] | None:
             image = yaml_path.parent / image
         with Image.open(image) as img:
             return int(img.size[0]), int(img.size[1])
+    except Image.DecompressionBombError as exc:  # the header says more pixels than Pillow will decode
+        raise ValueError(f"image too large to decode ({exc})") from None
     except (OSError, yaml.YAMLError, KeyError, TypeError, UnidentifiedImageError):
         return None
 

@@ -39,6 +39,7 @@ from planner.spherobot.rolling import (
 )
 from planner.spherobot.rollout import RolledManoeuvre, goal_errors, roll_manoeuvre
 from planner.spherobot.triangle import triangle_candidates
+from planner.termination import Termination
 
 POSITION_TOL = 1e-3  # goal position tolerance, in radii
 ANGLE_TOL_RAD = math.radians(0.1)
@@ -61,16 +62,19 @@ def candidates(req: ReconfigureRequest) -> list[Manoeuvre]:
 
 
 def plan_reconfiguration(
-    request: ReconfigureRequest | Mapping[str, Any], grid: OccupancyGrid | None = None
+    request: ReconfigureRequest | Mapping[str, Any], grid: OccupancyGrid | None = None,
+    termination: Termination | None = None,
 ) -> dict[str, Any]:
     """Plan, roll and (optionally) map-check a reconfiguration; return the result JSON as a dict.
 
     The doors pass the :class:`ReconfigureRequest` they built; a JSON request (Python callers) is read
     with :meth:`ReconfigureRequest.from_dict`. ``grid`` overrides ``request.map``. Raises InvalidInput for
     a bad request or map, Start/GoalOccupied, Start/GoalOutsideMap, and NoValidPathFound (with the
-    reason) when every alternative collides.
+    reason) when every alternative collides. ``termination`` bounds the wall clock (and may cancel): checked
+    before each candidate manoeuvre is rolled.
     """
     t_start = time.perf_counter()
+    clock = termination.start() if termination is not None else None
     req = request if isinstance(request, ReconfigureRequest) else ReconfigureRequest.from_dict(request)
     assert req.radius_m is not None and req.roll_rate_rad_s is not None
     R = req.radius_m
@@ -96,6 +100,8 @@ def plan_reconfiguration(
     tried = 0
     first_hit: str | None = None
     for m in cands:
+        if clock is not None:
+            clock.check("the reconfiguration")
         rolled = roll_manoeuvre(m, req.start, q0, R, speed)
         pos_err, p_err, head_err = goal_errors(rolled.xy[-1], rolled.final_quat, req.goal, req.goal_heading)
         if (

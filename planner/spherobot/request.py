@@ -21,6 +21,10 @@ from planner.spherobot.rolling import Quat, quat_from_tilt
 
 METHODS = ("arc", "triangle")
 ROBOT = "spherobot"
+#: largest sphere a request may roll (m): a rolled result is sampled per radius, so absurd radii break the numbers
+MAX_RADIUS_M = 100.0
+#: farthest goal, in sphere radii from the start (paper 004's examples are a few radii; samples grow with it)
+MAX_RADII = 200
 
 
 @dataclass(frozen=True)
@@ -116,6 +120,13 @@ class ReconfigureRequest:
             v = getattr(self, name)
             if not (math.isfinite(v) and v > 0):
                 raise InvalidInput(name, f"must be a finite number > 0, got {v!r}")
+        radius = float(self.radius_m or 0.0)  # filled and checked > 0 above
+        if radius > MAX_RADIUS_M:
+            raise InvalidInput("radius_m", f"must be at most {MAX_RADIUS_M:g} m, got {radius:g}")
+        distance = math.dist(self.start, self.goal)
+        if distance > MAX_RADII * radius:
+            raise InvalidInput("goal", f"is {distance:.3g} m from the start; a reconfiguration rolls at most "
+                                       f"{MAX_RADII} sphere radii ({MAX_RADII * radius:.3g} m)")
 
     @property
     def start_quat(self) -> Quat:

@@ -51,6 +51,8 @@ from planner.tensegrity.statics import (
 
 #: Forward and reverse state rings (paper 002 §II-E).
 FORWARD_RING = (1, 3, 2, 4)
+#: most samples a gait may hold (legs × samples per state): a gait's size is the request's distance
+MAX_GAIT_SAMPLES = 1_000_000
 REVERSE_RING = (1, 4, 2, 3)
 #: Every hybrid transition the robot can make (no 1↔2, no 3↔4).
 ALLOWED_TRANSITIONS = frozenset(
@@ -301,7 +303,13 @@ def plan_gait(
 
     target = abs(distance_m)
     per_cycle_net = float(np.linalg.norm(cycle[:2]))
-    hi = 4.0 * (math.ceil(target / per_cycle_net) + 1)
+    legs = 4.0 * (math.ceil(target / per_cycle_net) + 1)  # an upper bound on the legs the gait walks
+    if legs * steps > MAX_GAIT_SAMPLES:
+        field = "distance" if legs * 2 > MAX_GAIT_SAMPLES else "steps"
+        raise InvalidInput(field, f"{distance_m:g} m at {steps} samples per state would need about "
+                                  f"{legs * steps:.3g} samples; at most {MAX_GAIT_SAMPLES} are computed "
+                                  f"(one cycle advances {per_cycle_net:.3g} m)")
+    hi = legs
     sigma_end = _first_crossing(net if measure == "net" else gait.rolled, target, hi)
 
     samples: list[Sample] = []

@@ -16,6 +16,7 @@ import numpy as np
 
 from planner.errors import InvalidInput, RobotProfileError
 from planner.robot import RobotProfile, RollModel, load_robot
+from planner.termination import Termination
 from planner.vpip.cascade import rod_params, run_schedule
 from planner.vpip.circle import run_circle
 from planner.vpip.rods import rod_lengths
@@ -333,11 +334,13 @@ def schedule_report(
     plant: str = "surrogate",
     contact: str | None = None,
     gains: str | None = None,
+    termination: Termination | None = None,
 ) -> dict[str, Any]:
     """Run the cascade along a planner result (``sphereplan vpip schedule``; the full time series).
 
     ``robot`` defaults to the plan's own ``robot.name``, then ``daedalus``; ``contact`` and ``gains`` pick
-    the profile's contact setting and gain set (None: the profile's own).
+    the profile's contact setting and gain set (None: the profile's own); ``termination`` bounds the wall
+    clock (and may cancel).
     """
     if robot is None:
         embedded = plan.get("robot") if isinstance(plan, Mapping) else None
@@ -347,4 +350,5 @@ def schedule_report(
             else "daedalus"
         )
     profile = robot if isinstance(robot, RobotProfile) else load_robot(robot)
-    return run_schedule(plan, profile, driver=driver, plant=plant, contact=contact, gains=gains)
+    return run_schedule(plan, profile, driver=driver, plant=plant, contact=contact, gains=gains,
+                        termination=termination)

@@ -49,12 +49,16 @@ from planner.errors import InvalidInput, RobotProfileError
 from planner.kinematics import wrap
 from planner.result import state_column
 from planner.robot import RobotProfile
+from planner.termination import Termination
 from planner.vpip.choices import DRIVERS, PLANTS
 from planner.vpip.controllers import PitchController, RollController, gains_from_section
 from planner.vpip.mujoco_plant import MujocoPlant, Observation
 from planner.vpip.rods import RodDriver, RodParams, equivalent_plane
 from planner.vpip.settings import setting_names, with_settings
 from planner.vpip.simple import SimpleDriver
+
+#: control ticks between two looks at the wall clock (termination)
+CHECK_EVERY = 20
 
 SURROGATE_NOTE = (
     "surrogate plant, not the rod/contact physics: rotational speed follows theta_vpip through a "
@@ -323,8 +327,10 @@ def run_schedule(
     plant: str = "surrogate",
     contact: str | None = None,
     gains: str | None = None,
+    termination: Termination | None = None,
 ) -> dict[str, Any]:
     """Run the cascade along ``plan`` and return the time series (JSON-ready, SI units, radians).
+    ``termination`` (wall clock, cancel) is checked every ``CHECK_EVERY`` ticks.
 
     ``series`` holds, per tick: t, desired and simulated roll, desired and simulated ω, φ_VPIP,
     θ_VPIP, the pitch phase, the tracked pose (x, y, yaw, s) and ``rod_length_m`` (ticks × 2n commanded
@@ -342,7 +348,7 @@ def run_schedule(
     cascade = _Cascade(plan, profile, driver, tracking or TrackingGains(), plant)
     t_end = float(cascade.ref.t[-1] - cascade.ref.t[0])
     default_limit = 3.0 * t_end + 20.0 if plant == "mujoco" else 1.5 * t_end + 10.0
-    cascade.run(max_duration_s if max_duration_s is not None else default_limit)
+    cascade.run(max_duration_s if max_duration_s is not None else default_limit, termination)
     n = cascade.params.rods_per_side
     return {
         "driver": driver,
@@ -412,10 +418,14 @@ class _Cascade:
         self.max_lat = 0.0
         self.reached = False
 
-    def run(self, limit_s: float) -> None:
-        """Tick at the control rate until the end of the path is reached or ``limit_s`` has passed."""
+    def run(self, limit_s: float, termination: Termination | None = None) -> None:
+        """Tick at the control rate until the end of the path is reached or ``limit_s`` (simulated) has passed;
+        ``termination`` bounds the wall clock."""
         steps = math.ceil(limit_s / self.dt)
+        clock = termination.start() if termination is not None else None
         for k in range(steps + 1):
+            if clock is not None and k % CHECK_EVERY == 0:
+                clock.check("the VPIP schedule")
             t = k * self.dt
             obs = self.obs
             yawr, e_lat, k_cmd = self._desired_roll(obs, t)

@@ -4,7 +4,8 @@
 benchmark does and compares sphereplan with OMPL BIT* on Dubins and Reeds–Shepp spaces
 (:mod:`lab.planning.real`, docs/planning.md "The real-map benchmark"). ``--suite perception`` times stereo
 obstacle perception and EIS at paper 001's three resolutions next to the paper's figures (:mod:`lab.perception_bench`,
-docs/perception.md).
+docs/perception.md). ``--suite load`` runs the service under load (:func:`lab.loadtest.fleet_main`: one instance
+vs two behind HAProxy, health probes under big bodies, failover).
 """
 
 from __future__ import annotations
@@ -33,12 +34,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--rrt-time", type=finite_float, default=2.0, help="RRT* budget, s (0 = skip)")
     parser.add_argument("--csv", default=None, help="CSV output (default bench.csv; bench_real.csv for --suite real)")
     parser.add_argument("--png", default=None, help="PNG output (default bench.png; bench_real.png for --suite real)")
-    parser.add_argument("--suite", choices=("planning", "reconfigure", "mpc", "all", "real", "perception"),
+    parser.add_argument("--suite", choices=("planning", "reconfigure", "mpc", "all", "real", "perception", "load"),
                         default="planning",
                         help="planning: Hybrid A* vs OMPL on the shipped problems (default); reconfigure: Spherobot "
                              "plan times; mpc: MPC step times of the tracker; all: those three; real: random "
                              "problems on Nav2's maps against BIT* (minutes); perception: stereo and EIS times at "
-                             "paper 001's three resolutions")
+                             "paper 001's three resolutions; load: the service under load, one instance vs two "
+                             "behind HAProxy, and failover (needs haproxy; minutes)")
     real = parser.add_argument_group("--suite real")
     real.add_argument("--real-maps", default=None,
                       help="comma-separated map names in maps/real or YAML paths (default: every map in maps/real)")
@@ -54,6 +56,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     perception.add_argument("--threads", type=int, default=1, help="OpenCV threads (default 1: one core)")
     perception.add_argument("--resolutions", default=None,
                             help="comma-separated WxH (default: the paper's 1624x1240,812x620,541x413)")
+    load = parser.add_argument_group("--suite load")
+    load.add_argument("--duration", type=positive_float, default=10.0, help="seconds per row (default 10)")
+    load.add_argument("--workers", type=int, default=1, help="worker processes per instance (default 1)")
     parser.set_defaults(func=run)
 
 
@@ -142,6 +147,12 @@ def _sizes(text: str) -> list[tuple[int, int]]:
 def run(args: argparse.Namespace) -> int:
     if args.suite == "real":
         return run_real(args)
+    if args.suite == "load":
+        from lab.loadtest import fleet_main  # starts servers and HAProxy: only when asked
+
+        if not 1 <= args.workers <= 64:
+            raise InvalidInput("--workers", "must be in [1, 64]")
+        return fleet_main(args.duration, args.workers)
     if args.runs < 1:
         raise InvalidInput("--runs", "must be ≥ 1")
     if args.suite == "perception":

@@ -9,12 +9,14 @@ from __future__ import annotations
 
 import argparse
 import logging
+import re
 import threading
 from pathlib import Path
 from types import FrameType
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 from planner.errors import InvalidInput
+from service.auth import loopback_host
 from service.settings import MAX_TIME_LIMIT_S, ServiceSettings
 
 if TYPE_CHECKING:
@@ -54,6 +56,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--zenoh-listen", default="tcp/127.0.0.1:7447", metavar="ENDPOINT",
                         help="listen endpoint of the default peer (default tcp/127.0.0.1:7447)")
     parser.add_argument("--no-zenoh", action="store_true", help="HTTP only")
+    parser.add_argument("--robots", default="*", metavar="PATTERNS",
+                        help="robot ids whose Zenoh pose/goal topics this instance plans, comma-separated Zenoh key "
+                             "chunks (default '*': all; e.g. 'r1,r2' or 'east-$*'); give each instance of a fleet "
+                             "a disjoint set so that every goal is planned once")
     parser.add_argument("--ros2", action="store_true", help="also speak ROS 2 over Zenoh (rmw_zenoh format): "
                         "<ns>/goal_pose, <ns>/pose, <ns>/map in, <ns>/plan out (docs/ros2.md)")
     parser.add_argument("--ros2-domain", type=int, default=0, metavar="ID", help="ROS_DOMAIN_ID (default 0)")
@@ -69,22 +75,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--worker-memory", type=_count, default=2048, metavar="MB",
                         help="address-space ceiling of each worker process, MB (0 = none; default 2048)")
     parser.add_argument("--token-file", default=None, metavar="FILE",
-                        help="require 'Authorization: Bearer <token>' on every route but /healthz and /readyz; "
-                             "the token is the file's first line")
+                        help="require the token on every door: 'Authorization: Bearer <token>' on every HTTP route "
+                             "but /healthz and /readyz, the attachment 'Bearer <token>' on Zenoh queries and "
+                             "pose/goal puts; the token is the file's first line")
     parser.add_argument("--insecure", action="store_true",
-                        help="allow binding a non-loopback --host without --token-file")
+                        help="allow a non-loopback --host or Zenoh listen endpoint without credentials")
     parser.set_defaults(func=run)
-
-
-def _loopback(host: str) -> bool:
-    import ipaddress
-
-    if host == "localhost":
-        return True
-    try:
-        return ipaddress.ip_address(host).is_loopback
-    except ValueError:  # a host name: it may resolve to anything
-        return False
 
 
 def read_token(path: str) -> str:
@@ -101,6 +97,39 @@ def read_token(path: str) -> str:
     return token
 
 
+def load_zenoh_config(path: Path) -> Any:
+    """The ``zenoh.Config`` of ``path``, or :class:`InvalidInput` naming ``--zenoh-config`` with Zenoh's reason
+    on one line (checked before any worker starts)."""
+    import zenoh
+
+    try:
+        return zenoh.Config.from_file(str(path))
+    except Exception as exc:  # zenoh.ZError: not JSON5/YAML, unknown keys, bad values
+        reason = " ".join(str(exc).split())
+        reason = re.sub(r" at /\S+:\d+\.?$", "", reason)  # the Rust source location of the error
+        raise InvalidInput("--zenoh-config", f"{path} is not a usable Zenoh configuration: {reason}") from None
+
+
+def check_zenoh_door(config_path: Path | None, listen: str, has_token: bool, insecure: bool, ros2: bool) -> None:
+    """The Zenoh door's half of :mod:`service.auth`: the config file loads, and a listen beyond loopback has
+    credentials (the token, or the config's user/password) or ``--insecure``."""
+    from service.auth import exposure_problem, zenoh_has_credentials, zenoh_listen_endpoints
+
+    endpoints: list[str] | None
+    if config_path is None:
+        endpoints, usrpwd, field = [listen], False, "--zenoh-listen"
+    else:
+        config = load_zenoh_config(config_path)
+        endpoints, usrpwd, field = zenoh_listen_endpoints(config), zenoh_has_credentials(config), "--zenoh-config"
+    problem = exposure_problem(endpoints, has_token or usrpwd, insecure)
+    if problem is not None:
+        raise InvalidInput(field, f"the Zenoh node {problem}: give --token-file, a --zenoh-config with "
+                                  "user/password (deploy/zenoh/service.json5), or --insecure")
+    if ros2 and has_token and not usrpwd:
+        raise InvalidInput("--ros2", "ROS 2 messages cannot carry the token: with --token-file, lock the Zenoh door "
+                                     "with a --zenoh-config that has user/password and access control instead")
+
+
 def settings_from_args(args: argparse.Namespace) -> ServiceSettings:
     from planner.maps.catalogue import default_maps_dir
 
@@ -111,12 +140,17 @@ def settings_from_args(args: argparse.Namespace) -> ServiceSettings:
     if zenoh_config is not None and not zenoh_config.is_file():
         raise InvalidInput("--zenoh-config", f"{zenoh_config} is not a file")
     token = read_token(args.token_file) if args.token_file else None
-    if token is None and not _loopback(args.host) and not args.insecure:
+    if token is None and not loopback_host(args.host) and not args.insecure:
         raise InvalidInput("--host", f"{args.host} is not a loopback address: give --token-file (or --insecure to "
                                      "serve without authentication)")
+    if zenoh_config is not None:
+        load_zenoh_config(zenoh_config)
+    if not args.no_zenoh:
+        check_zenoh_door(zenoh_config, args.zenoh_listen, token is not None, args.insecure, args.ros2)
     return ServiceSettings(maps_dir=maps_dir, workers=args.workers, max_in_flight=args.max_in_flight,
                            max_time_limit_s=args.max_time_limit, zenoh=not args.no_zenoh,
                            zenoh_config=zenoh_config, zenoh_listen=args.zenoh_listen, ros2=args.ros2,
+                           zenoh_robots=tuple(p.strip() for p in args.robots.split(",")),
                            ros2_domain_id=args.ros2_domain, ros2_namespace=args.ros2_namespace,
                            ros2_map=args.ros2_map, ros2_robot=args.ros2_robot,
                            worker_memory_mb=args.worker_memory, http_token=token)
@@ -141,6 +175,27 @@ def _server_class() -> type:
     return Server
 
 
+def _http_protocol() -> type:
+    """uvicorn's h11 protocol with its own 400s (a request line or header it cannot parse, answered before the
+    app sees anything) as the service's error JSON instead of text/plain."""
+    import h11
+    from uvicorn.protocols.http.h11_impl import H11Protocol
+
+    from service.outcome import dumps, error_body
+
+    class JsonErrorProtocol(H11Protocol):
+        def send_400_response(self, msg: str) -> None:
+            body = dumps(error_body(f"malformed HTTP request: {msg}", "request"))
+            headers = [(b"content-type", b"application/json"), (b"content-length", str(len(body)).encode()),
+                       (b"connection", b"close")]
+            for event in (h11.Response(status_code=400, headers=headers, reason=b"Bad Request"), h11.Data(data=body),
+                          h11.EndOfMessage()):
+                self.transport.write(self.conn.send(event))
+            self.transport.close()
+
+    return JsonErrorProtocol
+
+
 def run(args: argparse.Namespace) -> int:
     import uvicorn
 
@@ -149,7 +204,7 @@ def run(args: argparse.Namespace) -> int:
     settings = settings_from_args(args)
     logging.getLogger("service").setLevel(logging.INFO)
     app = create_app(settings)
-    config = uvicorn.Config(app, host=args.host, port=args.port, lifespan="on",
+    config = uvicorn.Config(app, host=args.host, port=args.port, lifespan="on", http=_http_protocol(),
                             timeout_graceful_shutdown=GRACEFUL_SHUTDOWN_S, log_level="info")
     server = _server_class()(config, app.state.service)
     try:

@@ -96,18 +96,21 @@ class Server:
         return int(self.proc.returncode), time.monotonic() - t0
 
 
-def start_server(workers: int = 2, max_in_flight: int = 24, max_time_limit_s: float = 3.0) -> Server:
+def start_server(workers: int = 2, max_in_flight: int = 24, max_time_limit_s: float = 3.0, *extra: str,
+                 zenoh_config: dict[str, Any] | None = None) -> Server:
+    """``sphereplan serve`` on free ports with ``extra`` options; ``zenoh_config`` replaces the loopback peer's
+    config (its ``listen`` endpoints are kept if given, else the free port is listened on)."""
     tmp = Path(tempfile.mkdtemp(prefix="sphereplan-serve-"))
     maps_dir = make_maps(tmp / "maps")
     port, zport = free_port(), free_port()
     endpoint = f"tcp/127.0.0.1:{zport}"
     config = tmp / "zenoh.json5"
-    config.write_text(json.dumps({"mode": "peer", "listen": {"endpoints": [endpoint]},
-                                  "scouting": {"multicast": {"enabled": False}}}))
+    config.write_text(json.dumps(zenoh_config or {"mode": "peer", "listen": {"endpoints": [endpoint]},
+                                                  "scouting": {"multicast": {"enabled": False}}}))
     log_path = tmp / "serve.log"
     cmd = [sys.executable, "-m", "service.cli", "serve", "--port", str(port), "--maps", str(maps_dir),
            "--zenoh-config", str(config), "--workers", str(workers), "--max-in-flight", str(max_in_flight),
-           "--max-time-limit", str(max_time_limit_s)]
+           "--max-time-limit", str(max_time_limit_s), *extra]
     env = {**os.environ, "PYTHONPATH": str(REPO)}
     with log_path.open("wb") as log:
         proc = subprocess.Popen(cmd, cwd=REPO, env=env, stdout=log, stderr=subprocess.STDOUT)

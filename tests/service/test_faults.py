@@ -17,10 +17,10 @@ from typing import Any
 
 import pytest
 
-from planner.errors import PlannerCancelled, PlannerTimedOut
+from planner.errors import InvalidInput, PlannerCancelled
 from service.core import PlanningService
-from service.outcome import Outcome
-from service.pool import SupervisedPool
+from service.outcome import Outcome, outcome_of_exception
+from service.pool import SupervisedPool, WorkerHung
 from service.settings import ServiceSettings
 from service.wire import PlanRequest
 from tests.service import service_harness as harness
@@ -87,9 +87,9 @@ def test_a_busy_worker_killed_fails_only_its_own_job(service: PlanningService) -
     os.kill(busy[0], signal.SIGKILL)
     outcomes = [job.result(timeout=WAIT_S) for job in jobs]
     kinds = sorted(o.kind for o in outcomes)
-    assert kinds == ["failed", "internal"], [o.body for o in outcomes]
-    died = next(o for o in outcomes if o.kind == "internal")
-    assert died.answer.http_status == 500 and "worker process died" in died.json()["error_msg"]
+    assert kinds == ["failed", "unavailable"], [o.body for o in outcomes]
+    died = next(o for o in outcomes if o.kind == "unavailable")  # a server fault: 503, never a client error
+    assert died.answer.http_status == 503 and "worker process died" in died.json()["error_msg"]
     survivor = next(o for o in outcomes if o.kind == "failed")
     assert survivor.error_code == 207  # the other plan ran to its own time limit
     assert service.in_flight == 0
@@ -116,7 +116,7 @@ def test_jobs_overrunning_their_deadline_or_cancelled_are_ended_by_the_pool() ->
         poll(lambda: pool.ready_workers == 1, what="the worker")
         first = pool.worker_pids()[0]
         overrun = pool.submit_job(time.sleep, (600,), deadline_s=0.2)
-        with pytest.raises(PlannerTimedOut):
+        with pytest.raises(WorkerHung):  # a job that cannot stop itself is a server fault (503), not a timeout
             overrun.result(timeout=WAIT_S)
         poll(lambda: pool.ready_workers == 1 and first not in pool.worker_pids(), what="the replacement")
         running = pool.submit_job(time.sleep, (600,))
@@ -184,3 +184,118 @@ def test_a_short_plan_does_not_wait_behind_queued_long_ones(tmp_path: Path) -> N
             svc.cancel(job)
     finally:
         svc.close()
+
+
+# ----------------------------------------------------------------------------------- issue 25
+
+
+def test_a_job_sent_just_after_an_idle_worker_died_runs_on_its_replacement() -> None:
+    """Finding 1: the supervisor had not yet seen the idle worker die and handed it the next job, which failed."""
+    pool = SupervisedPool(1)
+    try:
+        for _ in range(3):
+            poll(lambda: pool.ready_workers == 1, what="the worker")
+            victim = pool.worker_pids()[0]
+            assert victim is not None
+            os.kill(victim, signal.SIGKILL)
+            job = pool.submit_job(os.getpid, ())  # at once: before the supervisor polls its process again
+            pid = job.result(timeout=WAIT_S)
+            assert pid != victim and pid in pool.worker_pids()
+    finally:
+        pool.shutdown()
+
+
+def test_a_stopped_worker_is_not_ready_and_its_job_is_a_503() -> None:
+    """Finding 9: a SIGSTOPped worker counted as ready and its job was answered as the client's timeout."""
+    pool = SupervisedPool(1)
+    try:
+        poll(lambda: pool.ready_workers == 1, what="the worker")
+        job = pool.submit_job(time.sleep, (600,), deadline_s=2.0)
+        (busy,) = poll(lambda: pool.busy_pids(), what="the job to start")
+        os.kill(busy, signal.SIGSTOP)
+        poll(lambda: pool.ready_workers == 0, what="the stopped worker to count as not ready")
+        with pytest.raises(WorkerHung) as hung:
+            job.result(timeout=WAIT_S)
+        outcome = outcome_of_exception(hung.value)
+        assert outcome.answer.http_status == 503 and outcome.kind == "unavailable", outcome.body
+        poll(lambda: pool.ready_workers == 1 and busy not in pool.worker_pids(), what="the replacement")
+        # a worker stopped while idle is replaced too, and the next job runs on its replacement
+        idle = pool.worker_pids()[0]
+        assert idle is not None
+        os.kill(idle, signal.SIGSTOP)
+        poll(lambda: pool.ready_workers == 0 or idle not in pool.worker_pids(), what="readiness to drop")
+        assert pool.submit_job(os.getpid, ()).result(timeout=WAIT_S) != idle
+    finally:
+        pool.shutdown()
+
+
+def test_a_request_sized_precomputation_is_inside_the_time_limit(service: PlanningService) -> None:
+    """Finding 2: ``options.n_yaw_bins: 720`` built its Reeds–Shepp table for seconds outside the clock; a long
+    ``step_m`` made each search chunk take seconds. Both now stop at the deadline without losing the worker."""
+    pool = pool_of(service)
+    poll(lambda: service.ready, what="the pool to be ready")
+    pids = set(pool.worker_pids())
+    table = service.submit_plan(PlanRequest.model_validate(plan_body(
+        options={"n_yaw_bins": 719, "allow_reverse": True}, time_limit_s=0.5))).result(timeout=WAIT_S)
+    assert table.error_code == 207, table.body
+    assert "n_yaw_bins" in table.json()["error_msg"]  # stopped while building the table, not after it
+    long_steps = service.submit_plan(PlanRequest.model_validate(plan_body(
+        goal=harness.SLOT_GOAL, options={**harness.SLOW, "step_m": 10.0}, time_limit_s=1.0))).result(timeout=WAIT_S)
+    assert long_steps.error_code == 207, long_steps.body
+    assert set(pool.worker_pids()) == pids  # both jobs stopped by themselves: no worker was killed
+    with pytest.raises(InvalidInput) as too_long:
+        service.submit_plan(PlanRequest.model_validate(plan_body(options={"step_m": 1e6})))
+    assert too_long.value.field == "options.step_m"
+
+
+def test_long_jobs_other_than_plans_stop_at_their_own_deadline() -> None:
+    """The termination carrier reaches the simulation, the reconfiguration and the VPIP schedule loops."""
+    from planner.closed_loop.simulate import simulate_plan
+    from planner.errors import PlannerTimedOut
+    from planner.hybrid_astar.plan import plan_path
+    from planner.robot import load_robot
+    from planner.spherobot.reconfigure import plan_reconfiguration
+    from planner.termination import Termination
+    from planner.vpip.api import schedule_report
+
+    grid = harness.hall_grid()
+    plan = plan_path(grid, load_robot(None), harness.HALL_START, harness.HALL_GOAL).to_json()
+    over = Termination(1e-9)
+    calls = [lambda: simulate_plan(grid, plan, termination=over),
+             lambda: plan_reconfiguration({"start": [0, 0], "goal": [1, 1]}, termination=over),
+             lambda: schedule_report({**plan, "robot": {"name": "daedalus"}}, termination=over)]
+    for call in calls:
+        with pytest.raises(PlannerTimedOut):
+            call()
+    cancelled = Termination(60.0, cancel=lambda: True)
+    with pytest.raises(PlannerCancelled):
+        simulate_plan(grid, plan, termination=cancelled)
+
+
+def test_robot_samples_keep_their_order_per_robot_and_one_robot_does_not_hold_another() -> None:
+    """The Zenoh topics' work runs off the callback thread (finding 3): in order per robot, robots in parallel."""
+    import threading
+
+    from service.limits import KeyedSerialExecutor
+
+    executor = KeyedSerialExecutor(workers=2)
+    release = threading.Event()
+    seen: list[tuple[str, int]] = []
+    lock = threading.Lock()
+
+    def record(key: str, i: int) -> None:
+        with lock:
+            seen.append((key, i))
+
+    try:
+        assert executor.submit("slow", release.wait)  # robot "slow" is busy with a large goal
+        for i in range(20):
+            assert executor.submit("fast", lambda i=i: record("fast", i))
+        assert executor.submit("slow", lambda: record("slow", 0))
+        poll(lambda: len(seen) == 20, what="robot 'fast' to go on while 'slow' is busy")
+        assert seen == [("fast", i) for i in range(20)]
+        release.set()
+        poll(lambda: ("slow", 0) in seen, what="robot 'slow' to go on")
+    finally:
+        release.set()
+        executor.close()

@@ -148,3 +148,85 @@ def test_a_forged_pose_or_path_does_not_get_through(secure: dict[str, Any]) -> N
     assert abs(last["x"] - HALL_GOAL[0]) < 0.15 and abs(last["y"] - HALL_GOAL[1]) < 0.15
     statuses = [json.loads(p) for k, p in received if k.endswith("/status")]
     assert [s["goal_id"] for s in statuses if s["state"] == "succeeded"] == [1]  # mallory's goal never counted
+
+
+# ------------------------------------------------------------------------------------ issue 25: a fleet
+
+ROUTER = REPO / "deploy" / "zenoh" / "router.json5"
+INSTANCE = REPO / "deploy" / "zenoh" / "instance.json5"
+FLEET_USERS = {**USERS, "router": "router-password-01", "sphereplan-1": "instance-1-password",
+               "sphereplan-2": "instance-2-password"}
+
+
+@pytest.fixture(scope="module")
+def secure_fleet(tmp_path_factory: pytest.TempPathFactory) -> Iterator[dict[str, Any]]:
+    """The shipped router.json5 (TLS, user/password, ACL) as a Python router, and two instances connected with
+    the shipped instance.json5 (own users; robots partitioned: r1 on the first, r2 on the second)."""
+    tmp = tmp_path_factory.mktemp("secure-fleet")
+    certs = make_certificates(tmp)
+    users = tmp / "users.txt"
+    users.write_text("".join(f"{user}:{password}\n" for user, password in FLEET_USERS.items()))
+    endpoint = f"tls/127.0.0.1:{harness.free_port()}"
+    config = zenoh.Config.from_file(str(ROUTER))
+    config.insert_json5("listen/endpoints", json.dumps([endpoint]))
+    config.insert_json5("transport/link/tls/listen_certificate", json.dumps(str(certs["server.pem"])))
+    config.insert_json5("transport/link/tls/listen_private_key", json.dumps(str(certs["server.key"])))
+    config.insert_json5("transport/link/tls/root_ca_certificate", json.dumps(str(certs["ca.pem"])))
+    config.insert_json5("transport/auth/usrpwd/dictionary_file", json.dumps(str(users)))
+    config.insert_json5("transport/auth/usrpwd/password", json.dumps(FLEET_USERS["router"]))
+    router = zenoh.open(config)
+    maps_dir = harness.make_maps(tmp / "maps")
+    started = []
+    for index, robots in ((1, ("r1",)), (2, ("r2",))):
+        conf = zenoh.Config.from_file(str(INSTANCE))
+        conf.insert_json5("connect/endpoints", json.dumps([endpoint.replace("127.0.0.1", "localhost")]))
+        conf.insert_json5("transport/link/tls/root_ca_certificate", json.dumps(str(certs["ca.pem"])))
+        conf.insert_json5("transport/auth/usrpwd/user", json.dumps(f"sphereplan-{index}"))
+        conf.insert_json5("transport/auth/usrpwd/password", json.dumps(FLEET_USERS[f"sphereplan-{index}"]))
+        conf.insert_json5("transport/auth/usrpwd/dictionary_file", json.dumps(str(users)))
+        service = PlanningService(ServiceSettings(maps_dir=maps_dir, zenoh=False, warm_up=False, zenoh_robots=robots),
+                                  ThreadPoolExecutor)
+        service.start()
+        node = ZenohNode(service, config=conf)
+        node.start()
+        started.append((service, node))
+    yield {"endpoint": endpoint.replace("127.0.0.1", "localhost"), "ca": certs["ca.pem"]}
+    for service, node in started:
+        node.close()
+        service.close()
+    router.close()
+
+
+def test_the_shipped_fleet_router_answers_each_query_once_and_plans_each_goal_once(
+        secure_fleet: dict[str, Any]) -> None:
+    received: list[str] = []
+    arrived = threading.Condition()
+
+    def on_sample(sample: zenoh.Sample) -> None:
+        with arrived:
+            received.append(str(sample.key_expr))
+            arrived.notify_all()
+
+    with open_client(secure_fleet, "operator") as operator:
+        time.sleep(1.0)  # both instances' queryables reach the router
+        for _ in range(5):
+            replies = list(operator.get("sphereplan/plan", payload=json.dumps(plan_body()).encode(), timeout=60,
+                                        consolidation=zenoh.ConsolidationMode.NONE))
+            assert len(replies) == 1 and replies[0].ok is not None, replies
+    with open_client(secure_fleet, "mallory") as mallory:
+        denied = list(mallory.get("sphereplan/plan", payload=json.dumps(plan_body()).encode(), timeout=3))
+        assert not [r for r in denied if r.ok is not None]
+    with open_client(secure_fleet, "r1") as robot:
+        subscribers = [robot.declare_subscriber(f"sphereplan/r1/{topic}", on_sample) for topic in ("path", "status")]
+        time.sleep(0.5)
+        robot.put("sphereplan/r1/pose", json.dumps(dict(zip(("x", "y", "yaw"), HALL_START, strict=True))))
+        robot.put("sphereplan/r1/goal", json.dumps({"map": "hall", "goal": dict(zip(("x", "y", "yaw"), HALL_GOAL,
+                                                                                    strict=True))}))
+        end = time.monotonic() + 120
+        with arrived:
+            while "sphereplan/r1/path" not in received and time.monotonic() < end:
+                arrived.wait(timeout=0.1)
+        time.sleep(2.0)  # a second instance's (wrong) path would arrive meanwhile
+        for subscriber in subscribers:
+            subscriber.undeclare()
+    assert received.count("sphereplan/r1/path") == 1, received

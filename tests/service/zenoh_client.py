@@ -13,6 +13,8 @@
                                                                      sample on a key ending in KEY_SUFFIX whose
                                                                      payload has those fields)
   {"liveliness": KEY_EXPR}                                         -> {"tokens": [key, ...]}
+A query or put may carry "attachment" (a string, e.g. "Bearer <token>"); a query "consolidation": "none" has
+every reply kept (to count how many instances answered), each reply then with its "replier" id.
   {"sleep": S}                                                     -> {}
 and the answers (one per step) are printed as a JSON list. The client connects in client mode to
 ENDPOINT only, with multicast scouting off.
@@ -43,7 +45,17 @@ def _decode(payload: zenoh.ZBytes | None) -> Any:
 def _reply(reply: zenoh.Reply) -> dict[str, Any]:
     sample = reply.ok if reply.ok is not None else reply.err
     assert sample is not None
-    return {"ok": reply.ok is not None, "encoding": str(sample.encoding), "payload": _decode(sample.payload)}
+    return {"ok": reply.ok is not None, "encoding": str(sample.encoding), "payload": _decode(sample.payload),
+            "replier": str(reply.replier_id) if reply.replier_id is not None else None}
+
+
+def _get_options(step: dict[str, Any]) -> dict[str, Any]:
+    options: dict[str, Any] = {"payload": _encode(step["payload"]), "timeout": float(step.get("timeout_s", 30))}
+    if step.get("attachment") is not None:
+        options["attachment"] = step["attachment"].encode()
+    if step.get("consolidation") == "none":
+        options["consolidation"] = zenoh.ConsolidationMode.NONE
+    return options
 
 
 def _encode(payload: Any) -> bytes:
@@ -52,22 +64,22 @@ def _encode(payload: Any) -> bytes:
 
 def _concurrent_queries(session: zenoh.Session, queries: list[dict[str, Any]]) -> dict[str, Any]:
     done = threading.Semaphore(0)
-    got: list[dict[str, Any] | None] = [None] * len(queries)
+    got: list[list[dict[str, Any]]] = [[] for _ in queries]
     order: list[int] = []
 
     def on_reply(index: int) -> Callable[[zenoh.Reply], None]:
         def record(reply: zenoh.Reply) -> None:
-            got[index] = _reply(reply)
+            got[index].append(_reply(reply))
             order.append(index)
 
         return record
 
     for i, query in enumerate(queries):
-        session.get(query["query"], zenoh.handlers.Callback(on_reply(i), done.release),
-                    payload=_encode(query["payload"]), timeout=float(query.get("timeout_s", 30)))
+        session.get(query["query"], zenoh.handlers.Callback(on_reply(i), done.release), **_get_options(query))
     for _ in queries:
         done.acquire(timeout=60)
-    return {"replies": got, "order": order}
+    # one query, one reply as a rule: its reply alone (a query answered more than once keeps them all)
+    return {"replies": [g[0] if len(g) == 1 else (g or None) for g in got], "all_replies": got, "order": order}
 
 
 def _wait(samples: list[tuple[str, Any]], arrived: threading.Condition, suffix: str, want: dict[str, Any],
@@ -102,13 +114,14 @@ def run(endpoint: str, steps: list[dict[str, Any]]) -> list[dict[str, Any]]:
     with zenoh.open(conf) as session:
         for step in steps:
             if "query" in step:
-                replies = [_reply(reply) for reply in session.get(
-                    step["query"], payload=_encode(step["payload"]), timeout=float(step.get("timeout_s", 30)))]
+                replies = [_reply(reply) for reply in session.get(step["query"], **_get_options(step))]
                 answers.append({"replies": replies})
             elif "queries" in step:
                 answers.append(_concurrent_queries(session, step["queries"]))
             elif "put" in step:
-                session.put(step["put"], _encode(step["payload"]), encoding=zenoh.Encoding.APPLICATION_JSON)
+                attachment = step.get("attachment")
+                session.put(step["put"], _encode(step["payload"]), encoding=zenoh.Encoding.APPLICATION_JSON,
+                            attachment=None if attachment is None else attachment.encode())
                 answers.append({})
             elif "subscribe" in step:
                 subscribers.append(session.declare_subscriber(step["subscribe"], on_sample))
