@@ -24,10 +24,13 @@ STATE_FIELDS = ("x", "y", "yaw", "roll", "v", "t", "s", "curvature")
 
 
 def build_states(poses: np.ndarray, robot: RobotProfile) -> np.ndarray:
-    """From dense poses (n, 5: x, y, yaw, roll, direction) to states (n, 8) in ``STATE_FIELDS`` order."""
+    """From dense poses (n, 5: x, y, yaw, roll, direction) to states (n, 8) in ``STATE_FIELDS`` order; yaws are
+    wrapped to (−π, π], as every reported yaw is (docs/contracts.md)."""
     n = len(poses)
     out = np.zeros((n, 8))
     out[:, :4] = poses[:, :4]
+    yaw = np.arctan2(np.sin(poses[:, 2]), np.cos(poses[:, 2]))
+    out[:, 2] = np.where(yaw == -np.pi, np.pi, yaw)
     if n == 0:
         return out
     d = np.hypot(np.diff(poses[:, 0]), np.diff(poses[:, 1]))

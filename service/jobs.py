@@ -21,7 +21,7 @@ from planner.occupancy import OccupancyGrid
 from planner.robot import RobotProfile, load_robot
 from planner.termination import Termination
 from service.grids import load_grid
-from service.outcome import Outcome, error_outcome, ok_outcome, outcome_of_exception
+from service.outcome import UNKNOWN_ERROR_CODE, Outcome, answer_for, error_outcome, ok_outcome, outcome_of_exception
 from service.pipeline import PlanQuery, execute_plan
 from service.settings import MAX_TIME_LIMIT_S
 
@@ -115,8 +115,11 @@ def simulate_job(plan: dict[str, Any], source: Path | InlineGrid, robot_name: st
     """``simulate_plan`` of a plan result (what ``sphereplan simulate`` writes)."""
     from planner.closed_loop.simulate import simulate_plan
 
-    return _job("simulate", lambda: simulate_plan(load_grid(source, None), plan, load_robot(robot_name), seed=seed,
-                                                  noise=noise, options=options))
+    outcome = _job("simulate", lambda: simulate_plan(load_grid(source, None), plan, load_robot(robot_name),
+                                                     seed=seed, noise=noise, options=options))
+    if outcome.ok and outcome.json()["status"] != "reached":  # the robot failed: answered as a failure is
+        return Outcome(answer_for(PlanningError), outcome.body, UNKNOWN_ERROR_CODE)
+    return outcome
 
 
 def reconfigure_job(problem: ReconfigureRequest, source: Path | InlineGrid | None) -> Outcome:

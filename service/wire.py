@@ -19,8 +19,19 @@ import re
 from collections.abc import Sequence
 from typing import Annotated, Any, Literal
 
-from pydantic import BaseModel, ConfigDict, Discriminator, Field, RootModel, Tag, field_validator, model_validator
+from pydantic import (
+    BaseModel,
+    ConfigDict,
+    Discriminator,
+    Field,
+    RootModel,
+    Tag,
+    ValidationInfo,
+    field_validator,
+    model_validator,
+)
 
+from planner.angles import check_angle
 from planner.errors import InvalidInput
 from service.settings import MAX_INLINE_CELLS, MAX_TIME_LIMIT_S
 
@@ -48,15 +59,55 @@ class _Strict(BaseModel):
     model_config = ConfigDict(extra="forbid", strict=True, allow_inf_nan=False, frozen=True)
 
 
+#: how a wire request gives degrees, where a model has a ``degrees`` flag
+DEGREES_HINT = '"degrees": true'
+
+
+def _wire_angle(value: float | None, degrees: bool, hint: str) -> float | None:
+    """The shared angle rule (:func:`planner.angles.check_angle`) as a pydantic validator: a value in radians
+    (or degrees when ``degrees``) outside [−2π, 2π] is refused at its own field."""
+    if value is None:
+        return None
+    try:
+        check_angle("angle", math.radians(value) if degrees else value, hint)
+    except InvalidInput as exc:
+        raise ValueError(exc.msg) from None
+    return value
+
+
+def _degrees_of(info: ValidationInfo) -> bool:
+    """The request's ``degrees`` flag (declared before its angles, so it is validated first)."""
+    return bool(info.data.get("degrees", False))
+
+
 class PoseIn(_Strict):
-    """A planar pose in the ``map`` frame."""
+    """A planar pose in the ``map`` frame: ``yaw`` in radians in [−2π, 2π], or ``yaw_deg`` in degrees (one of
+    the two)."""
 
     x: Metres
     y: Metres
-    yaw: Angle = Field(description="rad, counter-clockwise from +x")
+    yaw: Angle | None = Field(default=None, description="rad, counter-clockwise from +x, in [−2π, 2π]")
+    yaw_deg: Angle | None = Field(default=None, description="the yaw in degrees instead (in [−360, 360])")
+
+    @field_validator("yaw")
+    @classmethod
+    def _yaw_rad(cls, value: float | None) -> float | None:
+        return _wire_angle(value, False, "yaw_deg")
+
+    @field_validator("yaw_deg")
+    @classmethod
+    def _yaw_deg(cls, value: float | None) -> float | None:
+        return _wire_angle(value, True, "yaw_deg")
+
+    @model_validator(mode="after")
+    def _one_yaw(self) -> PoseIn:
+        if (self.yaw is None) == (self.yaw_deg is None):
+            raise ValueError("give the yaw as exactly one of yaw (rad) and yaw_deg (degrees)")
+        return self
 
     def as_pose(self) -> tuple[float, float, float]:
-        return self.x, self.y, self.yaw
+        yaw = self.yaw if self.yaw is not None else math.radians(self.yaw_deg or 0.0)
+        return self.x, self.y, yaw
 
 
 class InlineGrid(_Strict):
@@ -289,6 +340,7 @@ class PlanIn(BaseModel):
 
     states: list[StateIn] = Field(min_length=2, max_length=MAX_PLAN_STATES)
     robot: RobotRef | None = None
+    map: str | None = Field(default=None, max_length=256, description="the map the plan was made on")
 
     @model_validator(mode="after")
     def _not_too_long(self) -> PlanIn:
@@ -312,17 +364,25 @@ class SimulateRequest(_Strict):
     horizon: int = Field(default=15, ge=1, le=100, description="MPC horizon (steps)")
     time_limit_s: float | None = Field(default=None, gt=0, le=MAX_SIM_TIME_S,
                                        description="simulated seconds (default 2 × rolling time + 20 s)")
+    allow_other_map: bool = Field(default=False, description="roll a plan made on another map (refused otherwise)")
+    allow_other_robot: bool = Field(default=False,
+                                    description="roll a plan made for another robot (refused otherwise)")
 
 
 class TensegrityStaticRequest(_Strict):
     """``POST /v1/tensegrity/static``: the four hybrid static states of TeXploR for slider angles θ1, θ2
     (as ``sphereplan tensegrity static``)."""
 
+    degrees: bool = False
     theta1: Angle = Field(description="slider 1 angle (rad, or degrees with degrees=true)")
     theta2: Angle = Field(description="slider 2 angle (rad, or degrees with degrees=true)")
-    degrees: bool = False
     verify: bool = Field(default=True, description="cross-check with a potential-energy minimisation")
     robot: Name = "texplor"
+
+    @field_validator("theta1", "theta2")
+    @classmethod
+    def _angles(cls, value: float, info: ValidationInfo) -> float | None:
+        return _wire_angle(value, _degrees_of(info), DEGREES_HINT)
 
 
 Pair = Annotated[list[Metres], Field(min_length=2, max_length=2)]
@@ -352,12 +412,17 @@ class VpipRodsRequest(_Strict):
     """``POST /v1/vpip/rods``: eq. 18 rod lengths for one VPIP plane, roll and pitch phase (paper 000), as
     ``sphereplan vpip rods``."""
 
+    degrees: bool = False
     phi_vpip: Angle = Field(description="plane roll (rad, or degrees with degrees=true), > 0 lowers the left")
     theta_vpip: Angle = Field(description="plane pitch, > 0 drives forward")
     roll: Angle = Field(default=0.0, description="robot roll, > 0 leans left")
     pitch_phase: Angle = Field(default=0.0, description="how far the sphere has rolled")
-    degrees: bool = False
     robot: Name = "daedalus"
+
+    @field_validator("phi_vpip", "theta_vpip", "roll", "pitch_phase")
+    @classmethod
+    def _angles(cls, value: float, info: ValidationInfo) -> float | None:
+        return _wire_angle(value, _degrees_of(info), DEGREES_HINT)
 
 
 class VpipScheduleRequest(_Strict):
@@ -459,6 +524,6 @@ def invalid_input(errors: Sequence[Any]) -> InvalidInput:
         where = f" at character {loc[-1]}" if loc and isinstance(loc[-1], int) else ""
         return InvalidInput("body", f"malformed JSON{where}: {(first.get('ctx') or {}).get('error', first.get('msg'))}")
     field = field_name(first.get("loc", ()))
-    msg = str(first.get("msg", "invalid value"))
+    msg = str(first.get("msg", "invalid value")).removeprefix("Value error, ")
     others = len({f for f in (field_name(e.get("loc", ())) for e in errors) if not field.startswith(f)})
     return InvalidInput(field, msg + (f" (and {others} more field(s))" if others else ""))

@@ -308,6 +308,40 @@ def _metrics(grid: OccupancyGrid, rig: _Rig, run: _Run, opts: SimulationOptions)
     }
 
 
+def verdict(metrics: dict[str, Any], arrival_tolerance_m: float) -> tuple[str, str]:
+    """``("reached", "")`` when the robot reached the path's end without touching an obstacle, else
+    ``("failed", why)``: the one rule every door reports (the CLI exits 3, HTTP answers 422, Zenoh an error
+    reply, the viewer says "failed" and why)."""
+    why = []
+    if metrics["collided"]:
+        why.append(f"the robot collided (clearance {metrics['min_clearance_m']:.3f} m)")
+    if not metrics["reached_goal"]:
+        miss = (f"it ended {metrics['final_position_error_m']:.2f} m from the path's end "
+                f"(tolerance {arrival_tolerance_m:g} m)")
+        if not metrics["stopped_at_estimated_goal"]:
+            miss += f" when the simulation stopped at {metrics['duration_s']:.1f} s"
+        why.append(miss)
+    return ("failed", "; ".join(why)) if why else ("reached", "")
+
+
+def check_plan_fits(plan_json: dict[str, Any], map_name: str, robot_name: str | None, *, allow_other_map: bool,
+                    allow_other_robot: bool, map_field: str, robot_field: str, map_flag: str,
+                    robot_flag: str) -> None:
+    """Refuse (:class:`InvalidInput`) to roll a plan on a map or with a robot other than the ones it was made
+    for — its ``map`` and ``robot.name`` — unless allowed; ``*_field`` name the door's fields and ``*_flag``
+    how to allow it there. A plan without those keys is taken as it is."""
+    planned_map = plan_json.get("map")
+    if isinstance(planned_map, str) and planned_map != map_name and not allow_other_map:
+        raise InvalidInput(map_field, f"the plan was made on map {planned_map!r}, not {map_name!r}; a plan rolled "
+                                      f"on another map collides or misses its goal ({map_flag} to roll it anyway)")
+    planned = plan_json.get("robot")
+    planned_robot = planned.get("name") if isinstance(planned, dict) else None
+    if (robot_name is not None and isinstance(planned_robot, str) and planned_robot != robot_name
+            and not allow_other_robot):
+        raise InvalidInput(robot_field, f"the plan was made for robot {planned_robot!r}, not {robot_name!r} "
+                                        f"({robot_flag} to roll it anyway)")
+
+
 def _wrapped_yaw(rows: list[tuple[float, ...]], width: int) -> np.ndarray:
     """``rows`` as an array with column 3 (yaw) wrapped to (−π, π], as every reported yaw is."""
     arr = np.array(rows).reshape(-1, width)
@@ -333,7 +367,11 @@ def simulate_plan(
     rig = _set_up(grid, plan_json, robot, seed, dist, opts)
     run = _roll(rig, opts)
     metrics = _metrics(grid, rig, run, opts)
+    status, why = verdict(metrics, opts.arrival_tolerance_m)
     return {
+        "status": status,
+        "error_code": 0 if status == "reached" else 200,
+        "error_msg": why,
         "robot": rig.robot.to_json(),
         "seed": seed,
         "noise": noise if isinstance(noise, str) else "custom",
@@ -349,4 +387,4 @@ def simulate_plan(
     }
 
 
-__all__ = ["SimulationOptions", "cross_track_distance", "simulate_plan"]
+__all__ = ["SimulationOptions", "check_plan_fits", "cross_track_distance", "simulate_plan", "verdict"]

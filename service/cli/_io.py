@@ -37,15 +37,32 @@ def positive_float(text: str) -> float:
 
 
 def add_degrees_flag(parser: argparse.ArgumentParser) -> None:
-    """``--degrees``: the one spelling, on every command that reads an angle (the output stays radians)."""
+    """``--degrees``: the one spelling, on every command that reads an angle (the output stays radians).
+
+    The rule: options whose names say their unit (``--roll-deg``) are in that unit whatever ``--degrees`` says;
+    ``--degrees`` converts the others. Either way an angle must lie in [−2π, 2π] rad (±360°)."""
     parser.add_argument(
-        "--degrees", action="store_true", help="input angles are in degrees (output stays radians)"
+        "--degrees", action="store_true",
+        help="input angles are in degrees (output stays radians; options named --...-deg are degrees anyway)"
     )
 
 
-def angle(args: argparse.Namespace, value: float) -> float:
-    """An angle as typed, in radians (``--degrees`` converts)."""
-    return math.radians(value) if getattr(args, "degrees", False) else value
+def angle(args: argparse.Namespace, value: float, field: str) -> float:
+    """An angle as typed, in radians (``--degrees`` converts); outside [−2π, 2π] rad it is bad input naming
+    ``field`` and suggesting ``--degrees`` (:func:`planner.angles.check_angle`, the rule of every door)."""
+    from planner.angles import check_angle
+
+    rad = math.radians(value) if getattr(args, "degrees", False) else value
+    return check_angle(field, rad, "--degrees")
+
+
+def angle_deg(value: float, field: str) -> float:
+    """An option that is in degrees by its name (``--roll-deg``), checked by the same rule (±360°); returns
+    the degrees unchanged."""
+    from planner.angles import check_angle
+
+    check_angle(field, math.radians(value), f"{field} (already degrees; within ±360)")
+    return value
 
 
 #: -1 with ``-q`` (errors only), 0 by default (progress), 1 with ``-v`` (and log INFO), 2 with ``-vv`` (DEBUG)
@@ -196,11 +213,34 @@ def read_bag_map(path: str, topic: str | None) -> OccupancyGrid:
     return read_map_from_bag(path, topic or MAP_TOPIC)
 
 
+def map_path(text: str, field: str = "--map") -> str:
+    """What a ``--map`` names, as a path: a file or folder that exists (relative to the current folder), else a
+    shipped map by name (``garage``, as HTTP and docs/maps.md name them), else a shipped file by its path in the
+    repository (``maps/garage.yaml`` from any folder); otherwise bad input naming ``field``."""
+    if Path(text).exists():
+        return text
+    from planner.errors import NotFound
+    from planner.maps.catalogue import default_maps_dir, map_files
+
+    try:
+        folder = default_maps_dir()
+    except NotFound:
+        raise InvalidInput(field, f"{text} does not exist") from None
+    index = map_files(folder)
+    if text in index:
+        return str(index[text])
+    shipped = folder.parent / text
+    if not Path(text).is_absolute() and shipped.exists():
+        return str(shipped)
+    names = ", ".join(sorted(index)) or "none"
+    raise InvalidInput(field, f"{text} does not exist, and it is not a shipped map (names: {names})")
+
+
 def read_map_arg(path: str, topic: str | None, robot: Any = None) -> OccupancyGrid:
-    """``--map`` of a verb: a map_server YAML or mesh (``planner.maps.load.load_any``), or with an MCAP
-    file / rosbag2 folder the last ``nav_msgs/OccupancyGrid`` on ``--map-topic`` (default ``/map``)."""
-    if not Path(path).exists():
-        raise InvalidInput("--map", f"{path} does not exist")
+    """``--map`` of a verb (:func:`map_path`: a file, a shipped map's name or a shipped file from any folder): a
+    map_server YAML or mesh (``planner.maps.load.load_any``), or with an MCAP file / rosbag2 folder the last
+    ``nav_msgs/OccupancyGrid`` on ``--map-topic`` (default ``/map``)."""
+    path = map_path(path)
     if is_bag(path):
         return read_bag_map(path, topic)
     if topic is not None:

@@ -71,7 +71,7 @@ def _query(args: argparse.Namespace) -> PlanQuery:
     if args.forward_only:
         options["allow_reverse"] = False
     (x0, y0, yaw0), (x1, y1, yaw1) = args.start, args.goal
-    start, goal = (x0, y0, angle(args, yaw0)), (x1, y1, angle(args, yaw1))
+    start, goal = (x0, y0, angle(args, yaw0, "--start")), (x1, y1, angle(args, yaw1, "--goal"))
     termination = Termination() if args.time_limit is None else Termination(args.time_limit)
     return PlanQuery(start, goal, PlannerOptions.from_dict(options), termination)
 

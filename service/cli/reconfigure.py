@@ -5,7 +5,16 @@ from __future__ import annotations
 import argparse
 from typing import TYPE_CHECKING, Any
 
-from service.cli._io import add_degrees_flag, emit_result, finite_float, is_bag, positive_float, read_bag_map
+from service.cli._io import (
+    add_degrees_flag,
+    emit_result,
+    finite_float,
+    is_bag,
+    map_path,
+    positive_float,
+    read_bag_map,
+    say,
+)
 
 #: planner.spherobot.request.METHODS, repeated so that --help does not import the planner (1.5 s; a test
 #: keeps the two equal)
@@ -91,6 +100,7 @@ def run(args: argparse.Namespace) -> int:
 
     grid = None
     if args.map:
+        args.map = map_path(args.map)
         grid = read_bag_map(args.map, args.map_topic) if is_bag(args.map) else _load_map(args.map)
     result = plan_reconfiguration(ReconfigureRequest.from_dict(request_from_args(args)), grid=grid)
     emit_result(result, args.out, lambda out: write_reconfiguration_mcap(out, result, grid))
@@ -98,4 +108,7 @@ def run(args: argparse.Namespace) -> int:
         from planner.spherobot.plot import plot_reconfiguration
 
         plot_reconfiguration(result, args.plot, grid)
+    say("reconfigure", f"{result['method']} ({result['mode']}): {result['length_m']:.2f} m rolled in "
+                       f"{result['duration_s']:.1f} s, planned in {result['planning_time_s'] * 1000:.0f} ms"
+                       f"{', wrote ' + args.out if args.out else ''}")
     return 0
