@@ -19,6 +19,7 @@ import re
 from collections.abc import Sequence
 from typing import Annotated, Any, Literal
 
+import numpy as np
 from pydantic import (
     BaseModel,
     ConfigDict,
@@ -242,28 +243,77 @@ class RosMapMetaData(_Strict):
     origin: RosPose = Field(description="pose of the lower-left corner of cell (0, 0)")
 
 
+#: longest ``data_gzip_b64`` accepted (characters); the body limit caps it too
+MAX_GZIP_B64_CHARS = 8_000_000
+
+
+def gunzip_cells(text: str, cells: int) -> bytes:
+    """The int8 cells of a ``data_gzip_b64`` (base64 of gzip, or of zlib, of the row-major int8 data), read with
+    memory bounded by ``cells``: decompression stops one byte past it, so a small bomb cannot fill memory."""
+    import base64
+    import binascii
+    import zlib
+
+    try:
+        packed = base64.b64decode(text, validate=True)
+    except (binascii.Error, ValueError):
+        raise ValueError("data_gzip_b64 is not valid base64") from None
+    inflater = zlib.decompressobj(wbits=47)  # 32 + 15: gzip or zlib header, detected
+    try:
+        raw = inflater.decompress(packed, cells + 1)
+    except zlib.error as exc:
+        raise ValueError(f"data_gzip_b64 is not gzip/zlib data: {exc}") from None
+    if len(raw) != cells or inflater.unconsumed_tail:
+        more = "more than" if len(raw) > cells or inflater.unconsumed_tail else str(len(raw)) + " bytes, not"
+        raise ValueError(f"data_gzip_b64 holds {more} info.width × info.height = {cells} cells")
+    values = np.frombuffer(raw, dtype=np.int8)
+    bad = (values < -1) | (values > 100)
+    if bad.any():
+        i = int(np.argmax(bad))
+        raise ValueError(f"data_gzip_b64 cell {i} is {int(values[i])}; cells are 0..100 or -1 (unknown)")
+    return raw
+
+
 class RosOccupancyGrid(_Strict):
     """``nav_msgs/OccupancyGrid`` in its ROS JSON form: ``data`` row-major, ``width`` cells per row, row 0 at
-    the origin, values 0..100 or −1 (unknown); at most ``MAX_INLINE_CELLS`` cells."""
+    the origin, values 0..100 or −1 (unknown); at most ``MAX_INLINE_CELLS`` cells. Big maps may send
+    ``data_gzip_b64`` instead of ``data``: the same cells as int8 bytes, gzip-compressed, then base64 — a
+    2000 × 2000 map (100 m × 100 m at 5 cm) is typically tens of kB."""
 
     header: RosHeader = Field(default_factory=RosHeader)
     info: RosMapMetaData
-    data: list[Annotated[int, Field(ge=-1, le=100)]] = Field(min_length=1, max_length=MAX_INLINE_CELLS)
+    data: list[Annotated[int, Field(ge=-1, le=100)]] | None = Field(default=None, min_length=1,
+                                                                     max_length=MAX_INLINE_CELLS)
+    data_gzip_b64: str | None = Field(default=None, min_length=1, max_length=MAX_GZIP_B64_CHARS,
+                                      description="base64 of gzip of the int8 cells (instead of data)")
 
     @model_validator(mode="after")
     def _size(self) -> RosOccupancyGrid:
         cells = self.info.width * self.info.height
         if cells > MAX_INLINE_CELLS:
             raise ValueError(f"info.width × info.height = {cells} cells; at most {MAX_INLINE_CELLS} are accepted")
-        if len(self.data) != cells:
+        if (self.data is None) == (self.data_gzip_b64 is None):
+            raise ValueError("give the cells as exactly one of data (a list) and data_gzip_b64")
+        if self.data is not None and len(self.data) != cells:
             raise ValueError(f"data has {len(self.data)} values; info.width × info.height = {cells}")
+        if self.data_gzip_b64 is not None:
+            gunzip_cells(self.data_gzip_b64, cells)
         return self
 
-    def as_inline(self) -> InlineGrid:
+    def cells(self) -> np.ndarray:
+        """The cells as an int8 array (height, width), row 0 at the origin."""
         w, h = self.info.width, self.info.height
+        if self.data_gzip_b64 is not None:
+            flat = np.frombuffer(gunzip_cells(self.data_gzip_b64, w * h), dtype=np.int8)
+        else:
+            flat = np.asarray(self.data, dtype=np.int8)
+        return flat.reshape(h, w)
+
+    def as_inline(self) -> InlineGrid:
+        """The inline grid this message describes (its cells already checked: built without re-validation)."""
         x, y, yaw = self.info.origin.as_pose()
-        return InlineGrid(data=[self.data[i * w:(i + 1) * w] for i in range(h)], resolution_m=self.info.resolution,
-                          origin=[x, y, yaw], name="occupancy_grid")
+        return InlineGrid.model_construct(data=self.cells().tolist(), resolution_m=self.info.resolution,
+                                          origin=[x, y, yaw], name="occupancy_grid")
 
 
 def _map_kind(value: Any) -> str:

@@ -133,19 +133,50 @@ class Stages:
             self.stream.write(f"sphereplan {self.verb}: done in {time.perf_counter() - self.started:.2f} s\n")
 
 
+def make_folder(folder: str | Path, field: str) -> Path:
+    """``folder`` (an output folder a user named), created with its parents if missing; a file in the way or a
+    refusal of the file system is bad input naming ``field``."""
+    p = Path(folder)
+    try:
+        p.mkdir(parents=True, exist_ok=True)
+    except FileExistsError:
+        raise InvalidInput(field, f"{p} (or a folder above it) is a file, not a folder") from None
+    except OSError as exc:
+        raise InvalidInput(field, f"cannot create folder {p}: {exc.strerror or exc}") from None
+    return p
+
+
 def check_output(path: str | Path | None, field: str, formats: set[str] | None = None) -> None:
-    """Before any work: ``path`` (an option naming a file to write) must be a file in an existing folder,
-    with one of ``formats`` as its extension when given; else :class:`InvalidInput` naming ``field``."""
+    """Before any work: ``path`` (an option naming a file to write) must be a file name, with one of ``formats``
+    as its extension when given; its folder is created if missing (:func:`make_folder`); else
+    :class:`InvalidInput` naming ``field``."""
     if not path:
         return
     p = Path(path)
     if p.is_dir():
         raise InvalidInput(field, f"{p} is a folder; give a file name")
-    if not p.parent.is_dir():
-        raise InvalidInput(field, f"folder {p.parent} does not exist")
     if formats is not None and p.suffix.lower().lstrip(".") not in formats:
         raise InvalidInput(field, f"unsupported image format {p.suffix or '(none)'!r}; use one of "
                                   f"{', '.join(sorted(formats))}")
+    make_folder(p.parent, field)
+
+
+#: the options, on any verb, that name a file to write (their folders are created) or a folder to write into
+OUTPUT_FILES = {"out": "--out", "plot": "--plot", "csv": "--csv", "png": "--png"}
+OUTPUT_FOLDERS = {"out_dir": "--out-dir"}
+
+
+def make_output_folders(args: argparse.Namespace) -> None:
+    """Create the folders every output option of a verb names (``--out runs/a.json`` makes ``runs/``), so no verb
+    fails after its work for want of a folder; a file in the way is bad input naming the option."""
+    for attr, field in OUTPUT_FILES.items():
+        value = getattr(args, attr, None)
+        if isinstance(value, str) and value and not Path(value).is_dir():
+            make_folder(Path(value).parent, field)
+    for attr, field in OUTPUT_FOLDERS.items():
+        value = getattr(args, attr, None)
+        if isinstance(value, str) and value:
+            make_folder(value, field)
 
 
 def plot_formats() -> set[str]:

@@ -16,7 +16,17 @@ from pathlib import Path
 from typing import Any
 
 from planner.errors import InvalidInput
-from service.cli._io import add_degrees_flag, angle, emit_json, finite_float, map_path, positive_float, say, seed_int
+from service.cli._io import (
+    add_degrees_flag,
+    angle,
+    emit_json,
+    finite_float,
+    make_folder,
+    map_path,
+    positive_float,
+    say,
+    seed_int,
+)
 from service.outcome import EXIT_NO_SOLUTION
 
 VERB = "controllers"
@@ -65,8 +75,8 @@ def _figures(args: argparse.Namespace) -> int:
     from planner.pendulum.plot import plot_fig11, plot_fig12, plot_fig13
 
     folder = Path(args.out_dir) if args.out_dir else None
-    if folder is not None and not folder.is_dir():
-        raise InvalidInput("out_dir", f"folder {folder} does not exist")
+    if folder is not None:
+        make_folder(folder, "--out-dir")
     figs = run_figures(args.robot)
     if folder is not None:
         stem = f"pendulum-{figs['robot']}"
