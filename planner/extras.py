@@ -2,7 +2,8 @@
 
 The core install plans, simulates (pure-pursuit tracker) and serves. The heavy parts are extras: ``[physics]``
 (MuJoCo, the DAEDALUS rod plant), ``[control]`` (CasADi: the MPC tracker and the pendulum controllers' QP
-solvers) and ``[dev]`` (both, plus the test tools). Code that needs an extra imports its module through
+solvers), ``[mesh]`` (trimesh and python-fcl: mesh maps, .stl/.obj/.ply) and ``[dev]`` (all three, plus the
+test tools). Code that needs an extra imports its module through
 :func:`require`, so a missing extra is bad input naming the extra to install (CLI exit 2, HTTP 422, a Zenoh
 error reply), never an ``ImportError`` traceback.
 """
@@ -15,7 +16,7 @@ from types import ModuleType
 from planner.errors import InvalidInput
 
 #: module → the extra that installs it
-EXTRA_OF = {"casadi": "control", "mujoco": "physics"}
+EXTRA_OF = {"casadi": "control", "mujoco": "physics", "fcl": "mesh", "trimesh": "mesh"}
 
 
 class MissingExtra(InvalidInput):

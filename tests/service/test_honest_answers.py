@@ -181,16 +181,22 @@ def test_a_missing_extra_is_named(garage_plan: Path, tmp_path: Path, capsys: pyt
     code, _, err = run(capsys, "vpip", "circle", "--roll-deg", "10", "--plant", "mujoco", "--duration", "1",
                        "--out", str(tmp_path / "c.json"))
     assert code == 2 and "[physics]" in err
+    monkeypatch.setitem(sys.modules, "fcl", None)
+    monkeypatch.delitem(sys.modules, "planner.maps.mesh_world", raising=False)
+    code, _, err = run(capsys, "plan", "--map", str(MAPS / "cave.stl"), "--start", "5", "5", "0", "--goal", "6", "5",
+                       "0")
+    assert code == 2 and "[mesh]" in err and "Traceback" not in err
 
 
 def test_the_core_install_leaves_the_heavy_parts_to_extras() -> None:
     project = tomllib.loads((REPO / "pyproject.toml").read_text())["project"]
     core = " ".join(project["dependencies"])
-    for heavy in ("casadi", "mujoco", "playwright", "pytest"):
+    for heavy in ("casadi", "mujoco", "playwright", "pytest", "python-fcl"):
         assert heavy not in core
     extras = project["optional-dependencies"]
     assert any("mujoco" in d for d in extras["physics"]) and any("casadi" in d for d in extras["control"])
-    assert "sphereplan[physics,control]" in extras["dev"]
+    assert any("fcl" in d for d in extras["mesh"])
+    assert "sphereplan[physics,control,mesh]" in extras["dev"]
     assert "'.[dev]'" in (REPO / ".ci" / "run").read_text()
 
 
