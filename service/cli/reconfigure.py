@@ -72,7 +72,7 @@ if TYPE_CHECKING:
 def _load_map(path: str) -> OccupancyGrid:
     from planner.maps.nav2 import load_map
 
-    return load_map(path)
+    return load_map(map_path(path))
 
 
 def request_from_args(args: argparse.Namespace) -> dict[str, Any]:
@@ -100,7 +100,6 @@ def run(args: argparse.Namespace) -> int:
 
     grid = None
     if args.map:
-        args.map = map_path(args.map)
         grid = read_bag_map(args.map, args.map_topic) if is_bag(args.map) else _load_map(args.map)
     result = plan_reconfiguration(ReconfigureRequest.from_dict(request_from_args(args)), grid=grid)
     emit_result(result, args.out, lambda out: write_reconfiguration_mcap(out, result, grid))
