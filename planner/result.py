@@ -82,6 +82,19 @@ class PlanResult:
     analytic_segments: int = 0
     extra: dict[str, Any] = field(default_factory=dict)
 
+    def say_which_search(self, reversing: bool) -> None:
+        """Record in ``extra`` which search produced the path — ``search``: ``"reversing"`` (the search that may
+        roll backwards), ``"forward-only"`` (reversing not allowed) or ``"forward-alternative"`` (the forward-only
+        search run beside a reversing one, whose path was kept) — and how much of it rolls backwards
+        (``reverse_states``, ``reverse_length_m``), so a plan that reverses is never passed off silently."""
+        states = self.states
+        backwards = states[:, 4] < 0
+        steps = np.hypot(np.diff(states[:, 0]), np.diff(states[:, 1])) if len(states) > 1 else np.zeros(0)
+        self.extra["search"] = ("forward-alternative" if self.extra.get("forward_alternative")
+                                else "reversing" if reversing else "forward-only")
+        self.extra["reverse_states"] = int(backwards.sum())
+        self.extra["reverse_length_m"] = float(steps[backwards[1:]].sum()) if len(steps) else 0.0
+
     @property
     def length_m(self) -> float:
         return float(self.states[-1, 6]) if len(self.states) else 0.0

@@ -307,17 +307,16 @@ class PlanningService:
         from planner.closed_loop.tracker import MPCParams
 
         robot = self._plan_robot(request.robot, request.path, DEFAULT_ROBOT)
-        map_spec = request.map
-        map_name = map_spec if isinstance(map_spec, str) else (
-            "occupancy_grid" if isinstance(map_spec, RosOccupancyGrid) else map_spec.name)
-        check_plan_fits(request.path.model_dump(mode="json"), map_name, robot,
+        source = self._map_source(request.map)
+        check_plan_fits(request.path.model_dump(mode="json"), request.map if isinstance(request.map, str) else None,
+                        robot,
                         allow_other_map=request.allow_other_map, allow_other_robot=request.allow_other_robot,
                         map_field="map", robot_field="robot", map_flag='"allow_other_map": true',
                         robot_flag='"allow_other_robot": true')
         options = SimulationOptions(control_rate_hz=request.rate_hz, tracker=request.tracker,
                                     mpc=MPCParams(horizon=request.horizon), time_limit_s=request.time_limit_s)
-        return self._submit(simulate_job, request.path.model_dump(mode="json"), self._map_source(request.map), robot,
-                            request.seed, request.noise, options)
+        return self._submit(simulate_job, request.path.model_dump(mode="json"), source, robot, request.seed,
+                            request.noise, options)
 
     def submit_reconfigure(self, request: ReconfigureIn) -> Future[Outcome]:
         """Queue a Spherobot reconfiguration (optionally checked against a map). The goal may be at most

@@ -12,8 +12,6 @@ import math
 import time
 from dataclasses import dataclass, field
 
-import numpy as np
-
 from planner.errors import GoalOutsideMap, InvalidInput, PlannerTimedOut, StartOutsideMap
 from planner.hybrid_astar.plan import plan_path, planner_for
 from planner.hybrid_astar.search import PlannerOptions, Pose, warm_up
@@ -76,7 +74,7 @@ def execute_plan(query: PlanQuery, grid: OccupancyGrid, robot: RobotProfile) -> 
     check_on_map(query, grid)
     check_result_size(query, grid)
     warm_up()  # one-off compilation and the map's preprocessing (cached per map) happen before the clock
-    reversing = planner_for(grid, robot, query.options).reverse
+    planner_for(grid, robot, query.options)
     t0 = time.perf_counter()
     result = plan_path(grid, robot, query.start, query.goal, query.options, query.termination)
     # the limit covers the whole plan (smoothing, the exact re-checks, a mesh's fcl check), not only the search,
@@ -86,19 +84,4 @@ def execute_plan(query: PlanQuery, grid: OccupancyGrid, robot: RobotProfile) -> 
     if elapsed > limit:
         raise PlannerTimedOut(f"the plan took {elapsed:.3g} s, over its time limit of {limit:g} s",
                               planning_time_s=elapsed, expansions=result.expansions)
-    say_which_search(result, reversing)
     return result
-
-
-def say_which_search(result: PlanResult, reversing: bool) -> None:
-    """Add to the result which search produced it — ``search``: ``"reversing"`` (the search that may roll
-    backwards), ``"forward-only"`` (reversing not allowed) or ``"forward-alternative"`` (the forward-only search
-    run beside a reversing one, whose path was kept) — and how much of it rolls backwards
-    (``reverse_length_m``, ``reverse_states``), so a plan that reverses is never passed off silently."""
-    states = result.states
-    backwards = states[:, 4] < 0
-    steps = np.hypot(np.diff(states[:, 0]), np.diff(states[:, 1])) if len(states) > 1 else np.zeros(0)
-    result.extra["search"] = ("forward-alternative" if result.extra.get("forward_alternative")
-                              else "reversing" if reversing else "forward-only")
-    result.extra["reverse_states"] = int(backwards.sum())
-    result.extra["reverse_length_m"] = float(steps[backwards[1:]].sum()) if len(steps) else 0.0

@@ -324,14 +324,22 @@ def verdict(metrics: dict[str, Any], arrival_tolerance_m: float) -> tuple[str, s
     return ("failed", "; ".join(why)) if why else ("reached", "")
 
 
-def check_plan_fits(plan_json: dict[str, Any], map_name: str, robot_name: str | None, *, allow_other_map: bool,
-                    allow_other_robot: bool, map_field: str, robot_field: str, map_flag: str,
+#: the names of grids that came as messages (inline, nav_msgs/OccupancyGrid JSON): they say nothing of the map
+UNNAMED_MAPS = frozenset({"inline", "occupancy_grid"})
+
+
+def check_plan_fits(plan_json: dict[str, Any], map_name: str | None, robot_name: str | None, *,
+                    allow_other_map: bool, allow_other_robot: bool, map_field: str, robot_field: str, map_flag: str,
                     robot_flag: str) -> None:
     """Refuse (:class:`InvalidInput`) to roll a plan on a map or with a robot other than the ones it was made
     for — its ``map`` and ``robot.name`` — unless allowed; ``*_field`` name the door's fields and ``*_flag``
-    how to allow it there. A plan without those keys is taken as it is."""
+    how to allow it there. Maps are compared by name when both are named maps (a map file or a shipped map's
+    name; ``map_name`` None or an unnamed grid of :data:`UNNAMED_MAPS` is not compared). A plan without those keys
+    is taken as it is."""
     planned_map = plan_json.get("map")
-    if isinstance(planned_map, str) and planned_map != map_name and not allow_other_map:
+    named = isinstance(planned_map, str) and planned_map not in UNNAMED_MAPS
+    if (named and map_name is not None and map_name not in UNNAMED_MAPS and planned_map != map_name
+            and not allow_other_map):
         raise InvalidInput(map_field, f"the plan was made on map {planned_map!r}, not {map_name!r}; a plan rolled "
                                       f"on another map collides or misses its goal ({map_flag} to roll it anyway)")
     planned = plan_json.get("robot")

@@ -16,7 +16,7 @@ import argparse
 from typing import Any
 
 from planner.errors import InvalidInput
-from service.cli._io import Stages, emit_result, positive_float, read_json_file, read_map_arg, say, seed_int
+from service.cli._io import Stages, emit_result, is_bag, positive_float, read_json_file, read_map_arg, say, seed_int
 from service.outcome import EXIT_NO_SOLUTION, EXIT_OK
 
 VERB = "simulate"
@@ -126,7 +126,8 @@ def run(args: argparse.Namespace) -> int:
         assert given is not None
         plan = given
         robot = load_robot(args.robot) if args.robot else None
-        check_plan_fits(plan, grid.name, robot.name if robot is not None else None,
+        # a map read from a bag is named after the bag, not the map: compared only for map files
+        check_plan_fits(plan, None if is_bag(args.map) else grid.name, robot.name if robot is not None else None,
                         allow_other_map=args.allow_other_map, allow_other_robot=args.allow_other_robot,
                         map_field="--map", robot_field="--robot", map_flag="--allow-other-map",
                         robot_flag="--allow-other-robot")

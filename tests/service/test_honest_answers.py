@@ -156,19 +156,25 @@ def test_simulate_exits_3_when_the_robot_collides_or_misses(garage_plan: Path, t
 def test_http_and_zenoh_simulate_answer_the_same_rule(client: httpx.Client, server: Server) -> None:
     plan = client.post("/v1/plan", json=harness.plan_body())
     assert plan.status_code == 200 and plan.json()["map"] == "hall"
-    hall = client.get("/v1/maps/hall").json()
-    # the hall's extent, every cell blocked: the plan rolled here collides
-    blocked = {"data": [[100] * hall["width"] for _ in range(hall["height"])], "resolution_m": hall["resolution_m"],
-               "origin": hall["origin"], "name": "blocked"}
-    request = {"map": blocked, "path": plan.json(), "tracker": "pursuit", "noise": "none"}
+    # a plan made on another named map: refused unless allowed
+    request = {"map": "hall", "path": {**plan.json(), "map": "garage"}, "tracker": "pursuit", "noise": "none"}
     response = client.post("/v1/simulate", json=request)
     assert response.status_code == 422 and response.json()["field"] == "map"
     assert "allow_other_map" in response.json()["error_msg"]
     reply = zenoh_reply(server, "sphereplan/simulate", request)
     assert reply["ok"] is False and reply["payload"]["field"] == "map"
-    response = client.post("/v1/simulate", json={**request, "allow_other_map": True, "time_limit_s": 5.0})
-    assert response.status_code == 422, response.text
-    assert response.json()["status"] == "failed" and response.json()["error_msg"]
+    assert client.post("/v1/simulate", json={**request, "allow_other_map": True}).status_code == 200
+    # the hall's extent with every cell blocked: the plan rolled there collides — a failure, with its result
+    hall = client.get("/v1/maps/hall").json()
+    blocked = {"data": [[100] * hall["width"] for _ in range(hall["height"])], "resolution_m": hall["resolution_m"],
+               "origin": hall["origin"], "name": "blocked"}
+    request = {"map": blocked, "path": plan.json(), "tracker": "pursuit", "noise": "none", "time_limit_s": 5.0}
+    response = client.post("/v1/simulate", json=request)
+    assert response.status_code == 422, response.text[:300]
+    failed = response.json()
+    assert failed["status"] == "failed" and "collided" in failed["error_msg"] and failed["trajectory"]
+    reply = zenoh_reply(server, "sphereplan/simulate", request)
+    assert reply["ok"] is False and reply["payload"]["status"] == "failed"
 
 
 def test_a_missing_extra_is_named(garage_plan: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str],
@@ -216,6 +222,19 @@ def test_a_plan_says_which_search_produced_it(capsys: pytest.CaptureFixture[str]
                          "3.1416", "--time-limit", "0.001")
     assert code == 4 and "timeout" in err
     assert json.loads(out)["error_code"] == 207
+
+
+def test_one_time_limit_one_answer_at_every_door(client: httpx.Client, server: Server, tmp_path: Path,
+                                                 capsys: pytest.CaptureFixture[str]) -> None:
+    """The same tiny limit: exit 4 on the CLI, 422 with 207 over HTTP, an error reply with 207 over Zenoh."""
+    body = harness.plan_body(time_limit_s=1e-9)
+    response = client.post("/v1/plan", json=body)
+    assert response.status_code == 422 and response.json()["error_code"] == 207
+    reply = zenoh_reply(server, "sphereplan/plan", body)
+    assert reply["ok"] is False and reply["payload"]["error_code"] == 207
+    code, out, err = run(capsys, "plan", "--map", str(server.maps_dir / "hall.yaml"), "--start",
+                         *map(str, harness.HALL_START), "--goal", *map(str, harness.HALL_GOAL), "--time-limit", "1e-9")
+    assert code == 4 and json.loads(out)["error_code"] == 207 and err.count("timeout:") == 1
 
 
 # ------------------------------------------------------------------------------------ 4. resolution, encodings
