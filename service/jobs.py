@@ -149,4 +149,7 @@ def vpip_schedule_job(plan: dict[str, Any], robot_name: str, driver: str) -> Out
     """``schedule_report`` of a plan result (the series ``sphereplan vpip schedule --out`` writes)."""
     from planner.vpip.api import schedule_report
 
-    return _job("vpip schedule", lambda: schedule_report(plan, robot_name, driver))
+    outcome = _job("vpip schedule", lambda: schedule_report(plan, robot_name, driver))
+    if outcome.ok and not outcome.json()["summary"]["reached_end"]:  # as the CLI's exit 3: a failure, with its series
+        return Outcome(answer_for(PlanningError), outcome.body, UNKNOWN_ERROR_CODE)
+    return outcome

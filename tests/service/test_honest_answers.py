@@ -413,3 +413,18 @@ def test_bars_only_on_a_terminal(capsys: pytest.CaptureFixture[str], tmp_path: P
     code, _, err = run(capsys, "bench", "--problems", "garage", "--runs", "1", "--ompl-time", "0", "--rrt-time", "0")
     assert code == 0, err
     assert "\r" not in err
+
+
+def test_a_schedule_that_falls_short_is_a_failure_at_every_door(monkeypatch: pytest.MonkeyPatch) -> None:
+    """``vpip schedule`` exits 3 when the robot does not reach the path's end; the service answers the same
+    (422 over HTTP, an error reply over Zenoh) with the series it made."""
+    from planner.vpip import api
+    from service.jobs import vpip_schedule_job
+
+    short = {"summary": {"reached_end": False, "duration_s": 3.0}, "t": [0.0]}
+    monkeypatch.setattr(api, "schedule_report", lambda plan, robot, driver: short)
+    outcome = vpip_schedule_job({}, "daedalus", "vpip")
+    assert outcome.answer.http_status == 422 and outcome.answer.zenoh_reply == "reply_err"
+    assert outcome.answer.exit_code == 3 and outcome.json() == short
+    monkeypatch.setattr(api, "schedule_report", lambda plan, robot, driver: {**short, "summary": {"reached_end": True}})
+    assert vpip_schedule_job({}, "daedalus", "vpip").ok
