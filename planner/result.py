@@ -24,10 +24,13 @@ STATE_FIELDS = ("x", "y", "yaw", "roll", "v", "t", "s", "curvature")
 
 
 def build_states(poses: np.ndarray, robot: RobotProfile) -> np.ndarray:
-    """From dense poses (n, 5: x, y, yaw, roll, direction) to states (n, 8) in ``STATE_FIELDS`` order."""
+    """From dense poses (n, 5: x, y, yaw, roll, direction) to states (n, 8) in ``STATE_FIELDS`` order; yaws are
+    wrapped to (−π, π], as every reported yaw is (docs/contracts.md)."""
     n = len(poses)
     out = np.zeros((n, 8))
     out[:, :4] = poses[:, :4]
+    yaw = np.arctan2(np.sin(poses[:, 2]), np.cos(poses[:, 2]))
+    out[:, 2] = np.where(yaw == -np.pi, np.pi, yaw)
     if n == 0:
         return out
     d = np.hypot(np.diff(poses[:, 0]), np.diff(poses[:, 1]))
@@ -78,6 +81,19 @@ class PlanResult:
     min_clearance_m: float
     analytic_segments: int = 0
     extra: dict[str, Any] = field(default_factory=dict)
+
+    def say_which_search(self, reversing: bool) -> None:
+        """Record in ``extra`` which search produced the path — ``search``: ``"reversing"`` (the search that may
+        roll backwards), ``"forward-only"`` (reversing not allowed) or ``"forward-alternative"`` (the forward-only
+        search run beside a reversing one, whose path was kept) — and how much of it rolls backwards
+        (``reverse_states``, ``reverse_length_m``), so a plan that reverses is never passed off silently."""
+        states = self.states
+        backwards = states[:, 4] < 0
+        steps = np.hypot(np.diff(states[:, 0]), np.diff(states[:, 1])) if len(states) > 1 else np.zeros(0)
+        self.extra["search"] = ("forward-alternative" if self.extra.get("forward_alternative")
+                                else "reversing" if reversing else "forward-only")
+        self.extra["reverse_states"] = int(backwards.sum())
+        self.extra["reverse_length_m"] = float(steps[backwards[1:]].sum()) if len(steps) else 0.0
 
     @property
     def length_m(self) -> float:

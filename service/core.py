@@ -307,14 +307,20 @@ class PlanningService:
 
     def submit_simulate(self, request: SimulateRequest) -> Future[Outcome]:
         """Queue a closed-loop simulation of ``request.path`` (robot: the request's, else the plan's)."""
-        from planner.closed_loop.simulate import SimulationOptions
+        from planner.closed_loop.simulate import SimulationOptions, check_plan_fits
         from planner.closed_loop.tracker import MPCParams
 
         robot = self._plan_robot(request.robot, request.path, DEFAULT_ROBOT)
+        source = self._map_source(request.map)
+        check_plan_fits(request.path.model_dump(mode="json"), request.map if isinstance(request.map, str) else None,
+                        robot,
+                        allow_other_map=request.allow_other_map, allow_other_robot=request.allow_other_robot,
+                        map_field="map", robot_field="robot", map_flag='"allow_other_map": true',
+                        robot_flag='"allow_other_robot": true')
         options = SimulationOptions(control_rate_hz=request.rate_hz, tracker=request.tracker,
                                     mpc=MPCParams(horizon=request.horizon), time_limit_s=request.time_limit_s)
         termination, deadline = self._job_termination()
-        return self._submit(simulate_job, request.path.model_dump(mode="json"), self._map_source(request.map), robot,
+        return self._submit(simulate_job, request.path.model_dump(mode="json"), source, robot,
                             request.seed, request.noise, options, termination, deadline_s=deadline)
 
     def _job_termination(self) -> tuple[Termination, float]:
@@ -373,8 +379,7 @@ class PlanningService:
         left_info = camera_info_from_dict(request.left_info, "left_info")
         right_info = camera_info_from_dict(request.right_info, "right_info")
         check_pair(images[0], images[1], left_info, right_info, PERCEIVE_FIELDS)
-        pose = (request.pose.x, request.pose.y,
-                check_angle(_radians(request.pose.yaw, request.degrees), "pose.yaw"))
+        pose = request.pose.as_pose()  # yaw (rad) or yaw_deg, as every pose on the wire; degrees is roll/pitch's
         roll = check_angle(_radians(request.roll, request.degrees), "roll")
         pitch = check_angle(_radians(request.pitch, request.degrees), "pitch")
         obstacles = ObstacleFilter(min_height_m=request.min_height_m, max_height_m=request.max_height_m,

@@ -19,7 +19,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from planner.errors import InvalidInput, MapError, SpherePlanError
-from planner.maps.nav2 import MESH_SUFFIXES
+from planner.maps.nav2 import MESH_SUFFIXES, snap_resolution
 from planner.occupancy import OccupancyGrid
 from planner.robot import RobotProfile, load_robot
 
@@ -94,9 +94,9 @@ def inline_grid(spec: InlineGrid) -> OccupancyGrid:
     data = np.asarray(spec.data, dtype=np.int8)
     origin = (float(spec.origin[0]), float(spec.origin[1]), float(spec.origin[2]))
     digest = hashlib.sha1(data.tobytes()).hexdigest()
-    key = ("inline", digest, data.shape, float(spec.resolution_m), origin, spec.name)
-    return _cached(key, lambda: OccupancyGrid(data=data, resolution_m=float(spec.resolution_m),
-                                              origin=origin, name=spec.name))
+    resolution = snap_resolution(float(spec.resolution_m))  # 0.05 sent as a float32 plans as 0.05 (planner.maps.nav2)
+    key = ("inline", digest, data.shape, resolution, origin, spec.name)
+    return _cached(key, lambda: OccupancyGrid(data=data, resolution_m=resolution, origin=origin, name=spec.name))
 
 
 def load_grid(source: Path | InlineGrid, robot: RobotProfile | None) -> OccupancyGrid:

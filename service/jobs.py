@@ -21,7 +21,7 @@ from planner.occupancy import OccupancyGrid
 from planner.robot import RobotProfile, load_robot
 from planner.termination import Termination
 from service.grids import load_grid
-from service.outcome import Outcome, error_outcome, ok_outcome, outcome_of_exception
+from service.outcome import UNKNOWN_ERROR_CODE, Outcome, answer_for, error_outcome, ok_outcome, outcome_of_exception
 from service.pipeline import PlanQuery, execute_plan
 from service.settings import MAX_TIME_LIMIT_S
 
@@ -119,9 +119,12 @@ def simulate_job(plan: dict[str, Any], source: Path | InlineGrid, robot_name: st
     (wall clock; this worker's cancel flag attached)."""
     from planner.closed_loop.simulate import simulate_plan
 
-    return _job("simulate", lambda: simulate_plan(load_grid(source, None), plan, load_robot(robot_name), seed=seed,
-                                                  noise=noise, options=options,
-                                                  termination=termination.with_cancel(cancelled)))
+    outcome = _job("simulate", lambda: simulate_plan(load_grid(source, None), plan, load_robot(robot_name),
+                                                     seed=seed, noise=noise, options=options,
+                                                     termination=termination.with_cancel(cancelled)))
+    if outcome.ok and outcome.json()["status"] != "reached":  # the robot failed: answered as a failure is
+        return Outcome(answer_for(PlanningError), outcome.body, UNKNOWN_ERROR_CODE)
+    return outcome
 
 
 def reconfigure_job(problem: ReconfigureRequest, source: Path | InlineGrid | None, termination: Termination
@@ -154,8 +157,11 @@ def vpip_schedule_job(plan: dict[str, Any], robot_name: str, driver: str, termin
     ``termination``."""
     from planner.vpip.api import schedule_report
 
-    return _job("vpip schedule", lambda: schedule_report(plan, robot_name, driver,
-                                                         termination=termination.with_cancel(cancelled)))
+    outcome = _job("vpip schedule", lambda: schedule_report(plan, robot_name, driver,
+                                                            termination=termination.with_cancel(cancelled)))
+    if outcome.ok and not outcome.json()["summary"]["reached_end"]:  # as the CLI's exit 3: a failure, with its series
+        return Outcome(answer_for(PlanningError), outcome.body, UNKNOWN_ERROR_CODE)
+    return outcome
 
 
 def perceive_job(left: np.ndarray, right: np.ndarray, left_info: Any, right_info: Any,

@@ -24,6 +24,7 @@ from typing import Any
 import numpy as np
 
 from planner.errors import InvalidInput
+from planner.maps.nav2 import snap_resolution
 from planner.occupancy import OccupancyGrid
 
 FRAME = "map"
@@ -307,8 +308,8 @@ def grid_from_msg(msg: Any, name: str) -> OccupancyGrid:
     q = info.origin.orientation
     yaw = math.atan2(2 * (q.w * q.z + q.x * q.y), 1 - 2 * (q.y * q.y + q.z * q.z))
     origin = (float(info.origin.position.x), float(info.origin.position.y), yaw)
-    return OccupancyGrid(data=data.reshape(height, width), resolution_m=float(info.resolution), origin=origin,
-                         name=name)
+    return OccupancyGrid(data=data.reshape(height, width), resolution_m=snap_resolution(float(info.resolution)),
+                         origin=origin, name=name)
 
 
 def read_map_from_bag(path: str | Path, topic: str = MAP_TOPIC) -> OccupancyGrid:

@@ -13,8 +13,10 @@ from pathlib import Path
 
 from planner.errors import InvalidInput
 
-#: largest inline grid a request may carry (cells); a server may set a lower one, the HTTP body limit caps it too
-MAX_INLINE_CELLS = 250_000
+#: largest grid a request may carry (cells): a 100 m × 100 m map at 5 cm (2000 × 2000). A server may set a lower
+#: one; the body limit caps the JSON list forms further (~1.5 M cells in 4 MB), the compressed form
+#: (``data_gzip_b64`` of a nav_msgs/OccupancyGrid) carries the largest in well under 1 MB
+MAX_INLINE_CELLS = 4_000_000
 #: largest time limit a request may ask for (s); a server may set a lower one
 MAX_TIME_LIMIT_S = 60.0
 #: one Zenoh key chunk naming robot ids (``*``, ``r1``, ``east-$*``); never ``**`` or a ``/``

@@ -19,8 +19,20 @@ import re
 from collections.abc import Sequence
 from typing import Annotated, Any, Literal
 
-from pydantic import BaseModel, ConfigDict, Discriminator, Field, RootModel, Tag, field_validator, model_validator
+import numpy as np
+from pydantic import (
+    BaseModel,
+    ConfigDict,
+    Discriminator,
+    Field,
+    RootModel,
+    Tag,
+    ValidationInfo,
+    field_validator,
+    model_validator,
+)
 
+from planner.angles import check_angle
 from planner.errors import InvalidInput
 from service.settings import MAX_INLINE_CELLS, MAX_TIME_LIMIT_S
 
@@ -48,15 +60,55 @@ class _Strict(BaseModel):
     model_config = ConfigDict(extra="forbid", strict=True, allow_inf_nan=False, frozen=True)
 
 
+#: how a wire request gives degrees, where a model has a ``degrees`` flag
+DEGREES_HINT = '"degrees": true'
+
+
+def _wire_angle(value: float | None, degrees: bool, hint: str) -> float | None:
+    """The shared angle rule (:func:`planner.angles.check_angle`) as a pydantic validator: a value in radians
+    (or degrees when ``degrees``) outside [−2π, 2π] is refused at its own field."""
+    if value is None:
+        return None
+    try:
+        check_angle("angle", math.radians(value) if degrees else value, hint)
+    except InvalidInput as exc:
+        raise ValueError(exc.msg) from None
+    return value
+
+
+def _degrees_of(info: ValidationInfo) -> bool:
+    """The request's ``degrees`` flag (declared before its angles, so it is validated first)."""
+    return bool(info.data.get("degrees", False))
+
+
 class PoseIn(_Strict):
-    """A planar pose in the ``map`` frame."""
+    """A planar pose in the ``map`` frame: ``yaw`` in radians in [−2π, 2π], or ``yaw_deg`` in degrees (one of
+    the two)."""
 
     x: Metres
     y: Metres
-    yaw: Angle = Field(description="rad, counter-clockwise from +x")
+    yaw: Angle | None = Field(default=None, description="rad, counter-clockwise from +x, in [−2π, 2π]")
+    yaw_deg: Angle | None = Field(default=None, description="the yaw in degrees instead (in [−360, 360])")
+
+    @field_validator("yaw")
+    @classmethod
+    def _yaw_rad(cls, value: float | None) -> float | None:
+        return _wire_angle(value, False, "yaw_deg")
+
+    @field_validator("yaw_deg")
+    @classmethod
+    def _yaw_deg(cls, value: float | None) -> float | None:
+        return _wire_angle(value, True, "yaw_deg")
+
+    @model_validator(mode="after")
+    def _one_yaw(self) -> PoseIn:
+        if (self.yaw is None) == (self.yaw_deg is None):
+            raise ValueError("give the yaw as exactly one of yaw (rad) and yaw_deg (degrees)")
+        return self
 
     def as_pose(self) -> tuple[float, float, float]:
-        return self.x, self.y, self.yaw
+        yaw = self.yaw if self.yaw is not None else math.radians(self.yaw_deg or 0.0)
+        return self.x, self.y, yaw
 
 
 class InlineGrid(_Strict):
@@ -191,28 +243,77 @@ class RosMapMetaData(_Strict):
     origin: RosPose = Field(description="pose of the lower-left corner of cell (0, 0)")
 
 
+#: longest ``data_gzip_b64`` accepted (characters); the body limit caps it too
+MAX_GZIP_B64_CHARS = 8_000_000
+
+
+def gunzip_cells(text: str, cells: int) -> bytes:
+    """The int8 cells of a ``data_gzip_b64`` (base64 of gzip, or of zlib, of the row-major int8 data), read with
+    memory bounded by ``cells``: decompression stops one byte past it, so a small bomb cannot fill memory."""
+    import base64
+    import binascii
+    import zlib
+
+    try:
+        packed = base64.b64decode(text, validate=True)
+    except (binascii.Error, ValueError):
+        raise ValueError("data_gzip_b64 is not valid base64") from None
+    inflater = zlib.decompressobj(wbits=47)  # 32 + 15: gzip or zlib header, detected
+    try:
+        raw = inflater.decompress(packed, cells + 1)
+    except zlib.error as exc:
+        raise ValueError(f"data_gzip_b64 is not gzip/zlib data: {exc}") from None
+    if len(raw) != cells or inflater.unconsumed_tail:
+        more = "more than" if len(raw) > cells or inflater.unconsumed_tail else str(len(raw)) + " bytes, not"
+        raise ValueError(f"data_gzip_b64 holds {more} info.width × info.height = {cells} cells")
+    values = np.frombuffer(raw, dtype=np.int8)
+    bad = (values < -1) | (values > 100)
+    if bad.any():
+        i = int(np.argmax(bad))
+        raise ValueError(f"data_gzip_b64 cell {i} is {int(values[i])}; cells are 0..100 or -1 (unknown)")
+    return raw
+
+
 class RosOccupancyGrid(_Strict):
     """``nav_msgs/OccupancyGrid`` in its ROS JSON form: ``data`` row-major, ``width`` cells per row, row 0 at
-    the origin, values 0..100 or −1 (unknown); at most ``MAX_INLINE_CELLS`` cells."""
+    the origin, values 0..100 or −1 (unknown); at most ``MAX_INLINE_CELLS`` cells. Big maps may send
+    ``data_gzip_b64`` instead of ``data``: the same cells as int8 bytes, gzip-compressed, then base64 — a
+    2000 × 2000 map (100 m × 100 m at 5 cm) is typically tens of kB."""
 
     header: RosHeader = Field(default_factory=RosHeader)
     info: RosMapMetaData
-    data: list[Annotated[int, Field(ge=-1, le=100)]] = Field(min_length=1, max_length=MAX_INLINE_CELLS)
+    data: list[Annotated[int, Field(ge=-1, le=100)]] | None = Field(default=None, min_length=1,
+                                                                     max_length=MAX_INLINE_CELLS)
+    data_gzip_b64: str | None = Field(default=None, min_length=1, max_length=MAX_GZIP_B64_CHARS,
+                                      description="base64 of gzip of the int8 cells (instead of data)")
 
     @model_validator(mode="after")
     def _size(self) -> RosOccupancyGrid:
         cells = self.info.width * self.info.height
         if cells > MAX_INLINE_CELLS:
             raise ValueError(f"info.width × info.height = {cells} cells; at most {MAX_INLINE_CELLS} are accepted")
-        if len(self.data) != cells:
+        if (self.data is None) == (self.data_gzip_b64 is None):
+            raise ValueError("give the cells as exactly one of data (a list) and data_gzip_b64")
+        if self.data is not None and len(self.data) != cells:
             raise ValueError(f"data has {len(self.data)} values; info.width × info.height = {cells}")
+        if self.data_gzip_b64 is not None:
+            gunzip_cells(self.data_gzip_b64, cells)
         return self
 
-    def as_inline(self) -> InlineGrid:
+    def cells(self) -> np.ndarray:
+        """The cells as an int8 array (height, width), row 0 at the origin."""
         w, h = self.info.width, self.info.height
+        if self.data_gzip_b64 is not None:
+            flat = np.frombuffer(gunzip_cells(self.data_gzip_b64, w * h), dtype=np.int8)
+        else:
+            flat = np.asarray(self.data, dtype=np.int8)
+        return flat.reshape(h, w)
+
+    def as_inline(self) -> InlineGrid:
+        """The inline grid this message describes (its cells already checked: built without re-validation)."""
         x, y, yaw = self.info.origin.as_pose()
-        return InlineGrid(data=[self.data[i * w:(i + 1) * w] for i in range(h)], resolution_m=self.info.resolution,
-                          origin=[x, y, yaw], name="occupancy_grid")
+        return InlineGrid.model_construct(data=self.cells().tolist(), resolution_m=self.info.resolution,
+                                          origin=[x, y, yaw], name="occupancy_grid")
 
 
 def _map_kind(value: Any) -> str:
@@ -289,6 +390,7 @@ class PlanIn(BaseModel):
 
     states: list[StateIn] = Field(min_length=2, max_length=MAX_PLAN_STATES)
     robot: RobotRef | None = None
+    map: str | None = Field(default=None, max_length=256, description="the map the plan was made on")
 
     @model_validator(mode="after")
     def _not_too_long(self) -> PlanIn:
@@ -312,17 +414,25 @@ class SimulateRequest(_Strict):
     horizon: int = Field(default=15, ge=1, le=100, description="MPC horizon (steps)")
     time_limit_s: float | None = Field(default=None, gt=0, le=MAX_SIM_TIME_S,
                                        description="simulated seconds (default 2 × rolling time + 20 s)")
+    allow_other_map: bool = Field(default=False, description="roll a plan made on another map (refused otherwise)")
+    allow_other_robot: bool = Field(default=False,
+                                    description="roll a plan made for another robot (refused otherwise)")
 
 
 class TensegrityStaticRequest(_Strict):
     """``POST /v1/tensegrity/static``: the four hybrid static states of TeXploR for slider angles θ1, θ2
     (as ``sphereplan tensegrity static``)."""
 
+    degrees: bool = False
     theta1: Angle = Field(description="slider 1 angle (rad, or degrees with degrees=true)")
     theta2: Angle = Field(description="slider 2 angle (rad, or degrees with degrees=true)")
-    degrees: bool = False
     verify: bool = Field(default=True, description="cross-check with a potential-energy minimisation")
     robot: Name = "texplor"
+
+    @field_validator("theta1", "theta2")
+    @classmethod
+    def _angles(cls, value: float, info: ValidationInfo) -> float | None:
+        return _wire_angle(value, _degrees_of(info), DEGREES_HINT)
 
 
 #: longest base64 text of one image ``/v1/perceive`` accepts (characters); the HTTP body limit caps it too
@@ -333,7 +443,8 @@ class PerceiveRequest(_Strict):
     """``POST /v1/perceive``: one stereo pair → obstacle points in the map frame (as ``sphereplan perceive``;
     paper 001 §3.2). Images are base64 of image files (PNG, JPEG, ...); camera infos are the camera_info YAML
     documents (``image_width``, ``camera_matrix``, ``projection_matrix``, ...) as JSON objects. ``roll`` is the
-    sphere's (> 0 leans left), ``pitch`` the main axis's (REP-103); radians unless ``degrees``."""
+    sphere's (> 0 leans left), ``pitch`` the main axis's (REP-103); radians unless ``degrees``.
+    The pose's yaw is given as on every pose of the wire: ``yaw`` (rad) or ``yaw_deg``."""
 
     left_image: str = Field(min_length=1, max_length=MAX_IMAGE_BASE64, description="base64 of the left image file")
     right_image: str = Field(min_length=1, max_length=MAX_IMAGE_BASE64, description="base64 of the right image file")
@@ -377,12 +488,17 @@ class VpipRodsRequest(_Strict):
     """``POST /v1/vpip/rods``: eq. 18 rod lengths for one VPIP plane, roll and pitch phase (paper 000), as
     ``sphereplan vpip rods``."""
 
+    degrees: bool = False
     phi_vpip: Angle = Field(description="plane roll (rad, or degrees with degrees=true), > 0 lowers the left")
     theta_vpip: Angle = Field(description="plane pitch, > 0 drives forward")
     roll: Angle = Field(default=0.0, description="robot roll, > 0 leans left")
     pitch_phase: Angle = Field(default=0.0, description="how far the sphere has rolled")
-    degrees: bool = False
     robot: Name = "daedalus"
+
+    @field_validator("phi_vpip", "theta_vpip", "roll", "pitch_phase")
+    @classmethod
+    def _angles(cls, value: float, info: ValidationInfo) -> float | None:
+        return _wire_angle(value, _degrees_of(info), DEGREES_HINT)
 
 
 class VpipScheduleRequest(_Strict):
@@ -484,6 +600,6 @@ def invalid_input(errors: Sequence[Any]) -> InvalidInput:
         where = f" at character {loc[-1]}" if loc and isinstance(loc[-1], int) else ""
         return InvalidInput("body", f"malformed JSON{where}: {(first.get('ctx') or {}).get('error', first.get('msg'))}")
     field = field_name(first.get("loc", ()))
-    msg = str(first.get("msg", "invalid value"))
+    msg = str(first.get("msg", "invalid value")).removeprefix("Value error, ")
     others = len({f for f in (field_name(e.get("loc", ())) for e in errors) if not field.startswith(f)})
     return InvalidInput(field, msg + (f" (and {others} more field(s))" if others else ""))

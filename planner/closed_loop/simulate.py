@@ -104,26 +104,56 @@ def _rows(arr: np.ndarray, keys: tuple[str, ...]) -> list[dict[str, float]]:
     return [{k: round(float(v), 6) for k, v in zip(keys, row, strict=True)} for row in arr]
 
 
-def simulate_plan(
-    grid: OccupancyGrid,
-    plan_json: dict[str, Any],
-    robot: RobotProfile | str | None = None,
-    seed: int = 0,
-    noise: str | Disturbances = "default",
-    options: SimulationOptions | None = None,
-    termination: Termination | None = None,
-) -> dict[str, Any]:
-    """Roll ``plan_json`` (plan result with ``states``) on ``grid`` in closed loop; return the SIM.json dict.
+@dataclass
+class _Rig:
+    """Everything one closed-loop run is set up with: the robot, the reference path, the seeded generators,
+    the simulator and trackers, the localisation, the GNSS outages and the starting (true) state."""
 
-    ``robot`` defaults to the plan's ``robot.name``; ``noise`` is ``"none"``, ``"default"`` or a
-    :class:`Disturbances`; ``seed`` seeds every disturbance. ``termination`` bounds the wall clock (and may
-    cancel): checked every ``CHECK_EVERY`` control steps (``options.time_limit_s`` is simulated time).
-    """
-    opts = options or SimulationOptions()
+    robot: RobotProfile
+    dist: Disturbances
+    ref: ReferencePath
+    rng_slip: np.random.Generator
+    rng_imu: np.random.Generator
+    rng_gnss: np.random.Generator
+    dt: float
+    sim: SphereSimulator
+    fallback: PurePursuitTracker
+    mpc: MPCTracker | None
+    t_limit: float
+    state: SphereState
+    dyn: Any
+    odo: WheelOdometry
+    kf: FusionFilter
+    outages: list[tuple[float, float]]
+
+    def imu(self, roll: float) -> float:
+        """The IMU's roll reading (bias and noise)."""
+        d = self.dist
+        n = self.rng_imu.normal(0.0, d.imu_roll_noise_rad) if d.imu_roll_noise_rad > 0 else 0.0
+        return roll + d.imu_roll_bias_rad + n
+
+
+@dataclass
+class _Run:
+    """What the loop recorded: rows of (t, …) per control step, MPC solve times, fallbacks, arrival."""
+
+    traj: list[tuple[float, ...]] = field(default_factory=list)
+    est_rows: list[tuple[float, ...]] = field(default_factory=list)
+    odo_rows: list[tuple[float, ...]] = field(default_factory=list)
+    cmd_rows: list[tuple[float, ...]] = field(default_factory=list)
+    gnss_rows: list[tuple[float, ...]] = field(default_factory=list)
+    solve_ms: list[float] = field(default_factory=list)
+    fallback_steps: int = 0
+    reached: bool = False
+
+
+def _set_up(grid: OccupancyGrid, plan_json: dict[str, Any], robot: RobotProfile | str | None, seed: int,
+            dist: Disturbances, opts: SimulationOptions) -> _Rig:
+    """Stage 1: the robot, the reference path, the generators (one seed), the trackers, the starting state
+    (with its initial error) and the GNSS outage windows."""
     if not isinstance(plan_json, dict) or "states" not in plan_json:
         raise InvalidInput("path", "must be a plan result object with 'states'")
     rob = _robot_for(plan_json, robot)
-    dist = noise if isinstance(noise, Disturbances) else Disturbances.named(noise)
     ref = ReferencePath(plan_json["states"])
     rng_slip, rng_imu, rng_gnss, rng_init = (
         np.random.default_rng(s) for s in np.random.SeedSequence(seed).spawn(4)
@@ -153,11 +183,6 @@ def simulate_plan(
         (x0, y0, yaw0),
         FilterParams(**{**opts.filter.__dict__, "gnss_sigma_m": max(dist.gnss_noise_m, 0.005)}),
     )
-
-    def imu(roll: float) -> float:
-        n = rng_imu.normal(0.0, dist.imu_roll_noise_rad) if dist.imu_roll_noise_rad > 0 else 0.0
-        return roll + dist.imu_roll_bias_rad + n
-
     # GNSS outage windows drawn up front (Poisson starts, uniform durations)
     outages: list[tuple[float, float]] = []
     if dist.gnss_outage_rate_hz > 0:
@@ -166,28 +191,32 @@ def simulate_plan(
             length = float(rng_gnss.uniform(*dist.gnss_outage_s))
             outages.append((t_o, t_o + length))
             t_o += length + float(rng_gnss.exponential(1.0 / dist.gnss_outage_rate_hz))
+    return _Rig(rob, dist, ref, rng_slip, rng_imu, rng_gnss, dt, sim, fallback, mpc, t_limit, state, dyn, odo,
+                kf, outages)
+
+
+def _roll(rig: _Rig, opts: SimulationOptions, termination: Termination | None = None) -> _Run:
+    """Stage 2: the control loop, one period per pass, until the last segment is done or time runs out."""
+    dist, ref, dt, mpc, fallback, dyn = rig.dist, rig.ref, rig.dt, rig.mpc, rig.fallback, rig.dyn
+    odo, kf, state = rig.odo, rig.kf, rig.state
+    run = _Run()
     gnss_period = 1.0 / dist.gnss_rate_hz
     next_gnss = 0.0
-
-    traj, est_rows, odo_rows, cmd_rows, gnss_rows = [], [], [], [], []
-    solve_ms: list[float] = []
-    fallback_steps = 0
     seg_i = 0
     s_proj = 0.0
-    imu_prev = imu(state.roll)
+    imu_prev = rig.imu(state.roll)
     wheel_dist = 0.0
     k = 0
-    reached = False
     clock = termination.start() if termination is not None else None
     while True:
         if clock is not None and k % CHECK_EVERY == 0:
             clock.check("the simulation")
         t = k * dt
         # 1. sensors → localisation (eq. 2, eq. 3)
-        imu_now = imu(state.roll) if k > 0 else imu_prev
+        imu_now = rig.imu(state.roll) if k > 0 else imu_prev
         if k > 0:
             enc = wheel_dist * (
-                1.0 + (rng_slip.normal(0.0, dist.encoder_noise) if dist.encoder_noise > 0 else 0.0)
+                1.0 + (rig.rng_slip.normal(0.0, dist.encoder_noise) if dist.encoder_noise > 0 else 0.0)
             )
             inc = OdometryIncrement(enc, imu_prev, imu_now)
             odo.update(inc)
@@ -195,17 +224,17 @@ def simulate_plan(
         imu_prev = imu_now
         if t + 1e-9 >= next_gnss:
             next_gnss += gnss_period
-            out = any(a <= t < b for a, b in outages)
+            out = any(a <= t < b for a, b in rig.outages)
             if dist.gnss_available and not out:
-                n_xy = rng_gnss.normal(0.0, dist.gnss_noise_m, 2) if dist.gnss_noise_m > 0 else np.zeros(2)
+                n_xy = rig.rng_gnss.normal(0.0, dist.gnss_noise_m, 2) if dist.gnss_noise_m > 0 else np.zeros(2)
                 z = (state.x + n_xy[0], state.y + n_xy[1])
                 kf.correct(z)
-                gnss_rows.append((t, z[0], z[1]))
+                run.gnss_rows.append((t, z[0], z[1]))
         est = Estimate(float(kf.pose[0]), float(kf.pose[1]), float(kf.pose[2]), imu_now, state.v)
-        traj.append((t, state.x, state.y, state.yaw, state.roll, state.v))
-        est_rows.append((t, *kf.pose))
-        odo_rows.append((t, *odo.pose))
-        if t >= t_limit:
+        run.traj.append((t, state.x, state.y, state.yaw, state.roll, state.v))
+        run.est_rows.append((t, *kf.pose))
+        run.odo_rows.append((t, *odo.pose))
+        if t >= rig.t_limit:
             break
         # 2. tracker on the estimate
         seg = ref.segments[seg_i]
@@ -217,8 +246,8 @@ def simulate_plan(
             cmd = Command(0.0, float(seg.roll[-1]))
             if abs(state.v) < 1e-3:
                 if seg_i + 1 == len(ref.segments):
-                    reached = True
-                    cmd_rows.append((t, cmd.v, cmd.roll))
+                    run.reached = True
+                    run.cmd_rows.append((t, cmd.v, cmd.roll))
                     break
                 seg_i += 1
                 s_proj = 0.0
@@ -227,32 +256,35 @@ def simulate_plan(
         else:
             cmd = mpc.command(est, seg, s_proj) if mpc is not None else fallback.command(est, seg, s_proj)
             if mpc is not None:
-                solve_ms.append(cmd.solve_ms)
+                run.solve_ms.append(cmd.solve_ms)
                 if not cmd.ok:
-                    fallback_steps += 1
+                    run.fallback_steps += 1
                     cmd = fallback.command(est, seg, s_proj)
-        cmd_rows.append((t, cmd.v, cmd.roll))
+        run.cmd_rows.append((t, cmd.v, cmd.roll))
         # 3. the true sphere moves (eq. 1), with slip
-        g = 1.0 - dist.slip_scale + (rng_slip.normal(0.0, dist.slip_noise) if dist.slip_noise > 0 else 0.0)
+        g = 1.0 - dist.slip_scale + (rig.rng_slip.normal(0.0, dist.slip_noise) if dist.slip_noise > 0 else 0.0)
         if dyn is not None:
             dstep = dyn.step(state, cmd.v, cmd.roll, dt, ground_factor=g)
             state = dstep.state
             wheel_dist = dstep.wheel_distance_m
         else:
-            step = sim.step(state, cmd.v, cmd.roll, dt, ground_factor=g)
+            step = rig.sim.step(state, cmd.v, cmd.roll, dt, ground_factor=g)
             state, wheel_dist = step.state, step.wheel_distance_m
         k += 1
+    return run
 
-    tr = np.array(traj)
-    es = np.array(est_rows)
-    od = np.array(odo_rows)
-    end = ref.end
-    xt = cross_track_distance(ref.polyline(), tr[:, 1:3])
+
+def _metrics(grid: OccupancyGrid, rig: _Rig, run: _Run, opts: SimulationOptions) -> dict[str, Any]:
+    """Stage 3: how well the run went — tracking, arrival (decided by the truth), clearance, localisation."""
+    tr, es, od = np.array(run.traj), np.array(run.est_rows), np.array(run.odo_rows)
+    dyn, end = rig.dyn, rig.ref.end
+    xt = cross_track_distance(rig.ref.polyline(), tr[:, 1:3])
     est_err = np.hypot(*(es[:, 1:3] - tr[:, 1:3]).T)
     odo_err = np.hypot(*(od[:, 1:3] - tr[:, 1:3]).T)
-    clearance = footprint_clearance(grid, rob, tr[:, 1:4])
+    clearance = footprint_clearance(grid, rig.robot, tr[:, 1:4])
     final_error = float(math.hypot(tr[-1, 1] - end[0], tr[-1, 2] - end[1]))
-    metrics = {
+    solve_ms = run.solve_ms
+    return {
         "cross_track_rms_m": float(np.sqrt(np.mean(xt**2))),
         "cross_track_max_m": float(xt.max()),
         "final_position_error_m": final_error,
@@ -260,11 +292,11 @@ def simulate_plan(
         "min_clearance_m": clearance,
         "collided": bool(clearance <= 0.0),
         # the truth decides; the robot's own belief (stopped where its estimate said the goal is) is beside it
-        "reached_goal": reached and final_error <= opts.arrival_tolerance_m,
-        "stopped_at_estimated_goal": reached,
+        "reached_goal": run.reached and final_error <= opts.arrival_tolerance_m,
+        "stopped_at_estimated_goal": run.reached,
         "duration_s": float(tr[-1, 0]),
-        "steps": len(cmd_rows),
-        "fallback_steps": fallback_steps,
+        "steps": len(run.cmd_rows),
+        "fallback_steps": run.fallback_steps,
         "mpc_solve_ms_p50": float(np.percentile(solve_ms, 50)) if solve_ms else None,
         "mpc_solve_ms_p95": float(np.percentile(solve_ms, 95)) if solve_ms else None,
         "estimate_error_rms_m": float(np.sqrt(np.mean(est_err**2))),
@@ -275,26 +307,102 @@ def simulate_plan(
         "odometry_error_max_m": float(odo_err.max()),
         "odometry_error_final_m": float(odo_err[-1]),
         "odometry_yaw_error_final_rad": abs(wrap(float(od[-1, 3] - tr[-1, 3]))),
-        "gnss_fixes": len(gnss_rows),
+        "gnss_fixes": len(run.gnss_rows),
         "pendulum_pitch_max_rad": dyn.max_pitch_rad if dyn is not None else None,
         "pendulum_roll_max_rad": dyn.max_pendulum_roll_rad if dyn is not None else None,
         "lmpc_solve_ms_p50": float(np.percentile(dyn.solve_ms, 50)) if dyn is not None and dyn.solve_ms else None,
         "lmpc_solve_ms_p95": float(np.percentile(dyn.solve_ms, 95)) if dyn is not None and dyn.solve_ms else None,
     }
+
+
+def verdict(metrics: dict[str, Any], arrival_tolerance_m: float) -> tuple[str, str]:
+    """``("reached", "")`` when the robot reached the path's end without touching an obstacle, else
+    ``("failed", why)``: the one rule every door reports (the CLI exits 3, HTTP answers 422, Zenoh an error
+    reply, the viewer says "failed" and why)."""
+    why = []
+    if metrics["collided"]:
+        why.append(f"the robot collided (clearance {metrics['min_clearance_m']:.3f} m)")
+    if not metrics["reached_goal"]:
+        miss = (f"it ended {metrics['final_position_error_m']:.2f} m from the path's end "
+                f"(tolerance {arrival_tolerance_m:g} m)")
+        if not metrics["stopped_at_estimated_goal"]:
+            miss += f" when the simulation stopped at {metrics['duration_s']:.1f} s"
+        why.append(miss)
+    return ("failed", "; ".join(why)) if why else ("reached", "")
+
+
+#: the names of grids that came as messages (inline, nav_msgs/OccupancyGrid JSON): they say nothing of the map
+UNNAMED_MAPS = frozenset({"inline", "occupancy_grid"})
+
+
+def check_plan_fits(plan_json: dict[str, Any], map_name: str | None, robot_name: str | None, *,
+                    allow_other_map: bool, allow_other_robot: bool, map_field: str, robot_field: str, map_flag: str,
+                    robot_flag: str) -> None:
+    """Refuse (:class:`InvalidInput`) to roll a plan on a map or with a robot other than the ones it was made
+    for — its ``map`` and ``robot.name`` — unless allowed; ``*_field`` name the door's fields and ``*_flag``
+    how to allow it there. Maps are compared by name when both are named maps (a map file or a shipped map's
+    name; ``map_name`` None or an unnamed grid of :data:`UNNAMED_MAPS` is not compared). A plan without those keys
+    is taken as it is."""
+    planned_map = plan_json.get("map")
+    named = isinstance(planned_map, str) and planned_map not in UNNAMED_MAPS
+    if (named and map_name is not None and map_name not in UNNAMED_MAPS and planned_map != map_name
+            and not allow_other_map):
+        raise InvalidInput(map_field, f"the plan was made on map {planned_map!r}, not {map_name!r}; a plan rolled "
+                                      f"on another map collides or misses its goal ({map_flag} to roll it anyway)")
+    planned = plan_json.get("robot")
+    planned_robot = planned.get("name") if isinstance(planned, dict) else None
+    if (robot_name is not None and isinstance(planned_robot, str) and planned_robot != robot_name
+            and not allow_other_robot):
+        raise InvalidInput(robot_field, f"the plan was made for robot {planned_robot!r}, not {robot_name!r} "
+                                        f"({robot_flag} to roll it anyway)")
+
+
+def _wrapped_yaw(rows: list[tuple[float, ...]], width: int) -> np.ndarray:
+    """``rows`` as an array with column 3 (yaw) wrapped to (−π, π], as every reported yaw is."""
+    arr = np.array(rows).reshape(-1, width)
+    arr[:, 3] = [wrap(float(a)) for a in arr[:, 3]]
+    return arr
+
+
+def simulate_plan(
+    grid: OccupancyGrid,
+    plan_json: dict[str, Any],
+    robot: RobotProfile | str | None = None,
+    seed: int = 0,
+    noise: str | Disturbances = "default",
+    options: SimulationOptions | None = None,
+    termination: Termination | None = None,
+) -> dict[str, Any]:
+    """Roll ``plan_json`` (plan result with ``states``) on ``grid`` in closed loop; return the SIM.json dict.
+
+    ``robot`` defaults to the plan's ``robot.name``; ``noise`` is ``"none"``, ``"default"`` or a
+    :class:`Disturbances`; ``seed`` seeds every disturbance. Three stages: set up, roll, measure. ``termination``
+    bounds the wall clock (and may cancel): checked every ``CHECK_EVERY`` control steps (``options.time_limit_s``
+    is simulated time).
+    """
+    opts = options or SimulationOptions()
+    dist = noise if isinstance(noise, Disturbances) else Disturbances.named(noise)
+    rig = _set_up(grid, plan_json, robot, seed, dist, opts)
+    run = _roll(rig, opts, termination)
+    metrics = _metrics(grid, rig, run, opts)
+    status, why = verdict(metrics, opts.arrival_tolerance_m)
     return {
-        "robot": rob.to_json(),
+        "status": status,
+        "error_code": 0 if status == "reached" else 200,
+        "error_msg": why,
+        "robot": rig.robot.to_json(),
         "seed": seed,
         "noise": noise if isinstance(noise, str) else "custom",
         "tracker": opts.tracker,
         "model": opts.model,
         "control_rate_hz": opts.control_rate_hz,
-        "trajectory": _rows(tr, ("t", "x", "y", "yaw", "roll", "v")),
-        "estimate": _rows(es, ("t", "x", "y", "yaw")),
-        "odometry": _rows(od, ("t", "x", "y", "yaw")),
-        "gnss": _rows(np.array(gnss_rows).reshape(-1, 3), ("t", "x", "y")),
-        "commands": _rows(np.array(cmd_rows).reshape(-1, 3), ("t", "v", "roll")),
+        "trajectory": _rows(_wrapped_yaw(run.traj, 6), ("t", "x", "y", "yaw", "roll", "v")),
+        "estimate": _rows(_wrapped_yaw(run.est_rows, 4), ("t", "x", "y", "yaw")),
+        "odometry": _rows(_wrapped_yaw(run.odo_rows, 4), ("t", "x", "y", "yaw")),
+        "gnss": _rows(np.array(run.gnss_rows).reshape(-1, 3), ("t", "x", "y")),
+        "commands": _rows(np.array(run.cmd_rows).reshape(-1, 3), ("t", "v", "roll")),
         "metrics": metrics,
     }
 
 
-__all__ = ["SimulationOptions", "cross_track_distance", "simulate_plan"]
+__all__ = ["SimulationOptions", "check_plan_fits", "cross_track_distance", "simulate_plan", "verdict"]

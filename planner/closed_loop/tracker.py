@@ -216,8 +216,9 @@ class MPCTracker:
     def __init__(
         self, robot: RobotProfile, params: MPCParams | None = None, obstacles: ObstacleCircles | None = None
     ) -> None:
-        import casadi as ca
+        from planner.extras import require
 
+        ca = require("casadi", "tracker", "the MPC tracker (use --tracker pursuit without it)")
         self.robot = robot
         self.p = params or MPCParams()
         self.obstacles = obstacles

@@ -69,6 +69,7 @@ def plan_path(
     Raises :class:`~planner.errors.PlanningError` subclasses on failure."""
     planner = planner_for(grid, robot, options)
     result = planner.plan(start, goal, termination)
+    result.say_which_search(planner.reverse)
     check = mesh_recheck(grid, robot, result)
     if check is not None:
         result.extra["mesh_check"] = check

@@ -29,11 +29,16 @@ import math
 from dataclasses import dataclass
 from pathlib import Path
 
-import fcl
 import numpy as np
-import trimesh
 
 from planner.errors import MapError
+from planner.extras import MissingExtra
+
+try:  # the [mesh] extra: trimesh slices the mesh, python-fcl re-checks paths against it
+    import fcl
+    import trimesh
+except ImportError:
+    raise MissingExtra("map", "mesh", "a mesh map (.stl/.obj/.ply)") from None
 from planner.occupancy import OccupancyGrid
 from planner.robot import RobotProfile, load_robot
 

@@ -80,6 +80,22 @@ def _number(doc: dict[str, Any], key: str) -> float:
     return float(value)
 
 
+def snap_resolution(resolution_m: float) -> float:
+    """The resolution (m/cell) a map means: the shortest decimal that rounds to the same float32.
+
+    ``nav_msgs/OccupancyGrid`` carries the resolution as a float32, so 0.05 arrives as 0.05000000074505806;
+    planned with as it stands, the grid's cells and the plan differ from the same map read from its YAML.
+    Every reader (the YAML codec here, the ROS message readers, inline grids) snaps it, so a resolution within
+    float32 rounding of a round value plans exactly as that value does. Only a value that is exactly a float32
+    (one that has been through one) is snapped, and by less than float32's half unit in the last place (≤ 3e-8
+    relative); any other value is kept as given."""
+    value = float(resolution_m)
+    if not (math.isfinite(value) and 0 < value < 3e38) or float(np.float32(value)) != value:
+        return value
+    shortest = float(np.format_float_positional(np.float32(value), unique=True, trim="-"))
+    return shortest if np.float32(shortest) == np.float32(value) else value
+
+
 def _parse_params(doc: dict[str, Any]) -> dict[str, Any]:
     """Validate the map_server keys; returns resolution, origin, thresholds, negate, mode."""
     resolution = _number(doc, "resolution")
@@ -115,7 +131,7 @@ def _parse_params(doc: dict[str, Any]) -> dict[str, Any]:
     if not isinstance(image, str) or not image.strip():
         raise MapError("image", f"must be a non-empty file name, got {image!r}")
     return {
-        "resolution": resolution,
+        "resolution": snap_resolution(resolution),
         "origin": (float(origin[0]), float(origin[1]), float(origin[2])),
         "occupied_thresh": occupied,
         "free_thresh": free,

@@ -47,8 +47,9 @@ class DenseQP:
     """A QP with fixed H and A, solved by a CasADi conic plugin (``qpoases`` by default)."""
 
     def __init__(self, hessian: np.ndarray, a: np.ndarray | None = None, solver: str = "qpoases") -> None:
-        import casadi as ca
+        from planner.extras import require
 
+        ca = require("casadi", "qpsol", "the pendulum controllers' QP solver")
         if solver not in QP_SOLVERS:
             raise InvalidInput("qpsol", f"must be one of {', '.join(QP_SOLVERS)}, got {solver!r}")
         h = np.asarray(hessian, dtype=float)

@@ -23,6 +23,7 @@ import numpy as np
 
 from planner.errors import InvalidInput
 from planner.perception.camera_info import CameraInfo
+from planner.perception.opencv import opencv
 
 #: StereoSGBM modes by name (OpenCV constants): 5 directions single pass, 8 directions (two passes), 3-way
 MODES = {"sgbm": 0, "hh": 1, "3way": 2, "hh4": 3}
@@ -73,7 +74,7 @@ class StereoOptions:
 
 def to_grey(image: np.ndarray, field: str) -> np.ndarray:
     """An 8-bit single-channel copy of ``image`` ((H, W) or (H, W, 3|4) uint8/uint16/float in [0, 255])."""
-    import cv2
+    cv2 = opencv()
 
     a = np.asarray(image)
     if a.ndim == 3 and a.shape[2] in (3, 4):
@@ -91,7 +92,7 @@ def to_grey(image: np.ndarray, field: str) -> np.ndarray:
 
 def rectify(image: np.ndarray, info: CameraInfo) -> np.ndarray:
     """The rectified image of ``info``'s camera (unchanged when it already is: no distortion, R = I, P = K)."""
-    import cv2
+    cv2 = opencv()
 
     if info.is_rectified:
         return image
@@ -104,7 +105,7 @@ _matchers = threading.local()  # one matcher per thread and settings: it keeps i
 
 
 def _matcher(num_disparities: int, options: StereoOptions) -> Any:
-    import cv2
+    cv2 = opencv()
 
     cache = _matchers.__dict__.setdefault("cache", {})
     key = (num_disparities, options)
@@ -125,7 +126,7 @@ def sgbm_disparity(left: np.ndarray, right: np.ndarray, num_disparities: int, op
     """Disparity (H, W) float32 in pixels of the rectified grey pair (left as reference); NaN where SGBM found
     no match. OpenCV's fixed-point output (1/16 px) is divided out."""
     if options.full_width:
-        import cv2
+        cv2 = opencv()
 
         pad = num_disparities
         left = cv2.copyMakeBorder(left, 0, 0, pad, 0, cv2.BORDER_CONSTANT, value=0)

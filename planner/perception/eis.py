@@ -29,6 +29,7 @@ import numpy as np
 from planner.errors import InvalidInput
 from planner.perception.camera_info import CameraInfo
 from planner.perception.mount import OPTICAL_IN_BODY, attitude_rep103, check_angle
+from planner.perception.opencv import opencv
 
 
 def eq6_matrix(roll_adj_rad: float, pitch_adj_rad: float, yaw_adj_rad: float) -> np.ndarray:
@@ -61,7 +62,7 @@ def stabilise(image: np.ndarray, info: CameraInfo, roll_rad: float, pitch_rad: f
     attitude (rad). Undistortion (eq. 8, ``info``'s model and coefficients) and the reprojection ``K·R0·K⁻¹``
     run as one remap with the same K; ``stabilised`` has the image's shape and dtype, black where no raw pixel
     maps; ``valid`` (H, W) bool marks the pixels that came from inside the raw frame."""
-    import cv2
+    cv2 = opencv()
 
     check_angle(roll_rad, "roll")
     check_angle(pitch_rad, "pitch")

@@ -7,11 +7,12 @@ from pathlib import Path
 import numpy as np
 
 from planner.errors import InvalidInput
+from planner.perception.opencv import opencv
 
 
 def read_image(path: str | Path, field: str) -> np.ndarray:
     """An image file as an array (grey (H, W) or BGR (H, W, 3), as stored); unreadable → InvalidInput(field)."""
-    import cv2
+    cv2 = opencv()
 
     p = Path(path)
     if not p.is_file():
@@ -30,7 +31,7 @@ def decode_image(data: bytes, field: str, max_pixels: int = 16_000_000) -> np.nd
     compressed file can hold a huge picture)."""
     import io
 
-    import cv2
+    cv2 = opencv()
     from PIL import Image, UnidentifiedImageError
 
     try:
@@ -48,7 +49,7 @@ def decode_image(data: bytes, field: str, max_pixels: int = 16_000_000) -> np.nd
 
 def write_image(path: str | Path, image: np.ndarray, field: str) -> None:
     """Write ``image`` (format from the extension); a refusal is InvalidInput(field)."""
-    import cv2
+    cv2 = opencv()
 
     try:
         ok = cv2.imwrite(str(path), image)

@@ -28,6 +28,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from planner.errors import InvalidInput
+from planner.perception.opencv import opencv
 
 REASONS = ("below_ground", "ground", "suspended", "too_far")
 #: the reason :meth:`ObstacleFilter.specks` drops a point for, counted after :data:`REASONS`
@@ -87,7 +88,7 @@ class ObstacleFilter:
         fewer than ``min_blob_px`` touching pixels (8-connected)."""
         if self.min_blob_px <= 1 or len(pixels) == 0:
             return np.zeros(len(pixels), dtype=bool)
-        import cv2
+        cv2 = opencv()
 
         image = np.zeros(shape, dtype=np.uint8)
         image[pixels[:, 0], pixels[:, 1]] = 1

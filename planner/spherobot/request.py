@@ -15,6 +15,7 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
+from planner.angles import check_angle
 from planner.errors import InvalidInput
 from planner.robot import load_robot
 from planner.spherobot.rolling import Quat, quat_from_tilt
@@ -105,6 +106,12 @@ class ReconfigureRequest:
             v = getattr(self, name)
             if v is not None:
                 _number(v, name)
+        # the one angle rule of every door (planner.angles): radians in [−2π, 2π]
+        hint = "--degrees (CLI) or \"degrees\": true (HTTP, Zenoh)"
+        check_angle("start_tilt", self.start_tilt[1], hint)
+        for name in ("start_spin", "goal_heading", "alpha_final"):
+            if getattr(self, name) is not None:
+                check_angle(name, getattr(self, name), hint)
         if self.alpha_final is not None and self.method != "arc":
             raise InvalidInput("alpha_final", "only the arc method has a final roll direction")
         if self.alpha_final is not None and self.goal_heading is not None:

@@ -256,21 +256,8 @@ def _first_crossing(func: Any, target: float, hi: float, steps_per_leg: int = 64
     raise NoValidPathFound(f"the gait does not reach {target} m within {hi / 4:.0f} cycles")
 
 
-def plan_gait(
-    distance_m: float,
-    profile: RobotProfile,
-    steps: int = 32,
-    start_state: int = 1,
-    corner_deg: float | None = None,
-    measure: str = "net",
-) -> dict[str, Any]:
-    """What ``sphereplan tensegrity gait`` writes: slider trajectories that roll the robot ``distance_m``.
-
-    ``distance_m`` > 0 walks the forward ring 1 → 3 → 2 → 4, < 0 the reverse ring. ``measure`` says what
-    the distance counts: ``"net"`` (default), the advance of O_b along the gait's mean heading (the
-    direction a full cycle moves it), or ``"rolled"``, the contact's ground travel Σ r·|Δφ|. ``steps``
-    samples are taken on every leg (one leg = one state). Raises :class:`InvalidInput` naming the field.
-    """
+def _check_gait_request(distance_m: float, steps: int, start_state: int, measure: str) -> None:
+    """Stage 0 of :func:`plan_gait`: every argument, as :class:`InvalidInput` naming the field."""
     if not math.isfinite(distance_m) or distance_m == 0.0:
         raise InvalidInput("distance", f"must be a finite non-zero number of metres, got {distance_m!r}")
     if steps < 2:
@@ -279,39 +266,21 @@ def plan_gait(
         raise InvalidInput("start_state", f"must be 1, 2, 3 or 4, got {start_state}")
     if measure not in ("net", "rolled"):
         raise InvalidInput("measure", f"must be 'net' or 'rolled', got {measure!r}")
-    params = params_from_profile(profile)
-    section = profile.extra.get("texplor", {})
-    corner = math.radians(
-        corner_deg if corner_deg is not None else float(section.get("gait_corner_deg", 45.0))
-    )
-    speed = float(section.get("slider_speed_rad_s", 0.5))
-    rect = make_rectangle(corner, params)
-    forward = distance_m > 0
-    # Eq. 16 with no yaw sends a cycle some way off +x (forward: ~154°); turn the start pose about z_s
-    # so that a full cycle advances along +x (forward, distance > 0) or -x (reverse, distance < 0).
+
+
+def _oriented_gait(params: Any, rect: Any, start_state: int, forward: bool) -> _Gait:
+    """Stage 1: the gait, turned about z_s so that a full cycle advances along +x (forward) or −x (reverse).
+
+    Eq. 16 with no yaw sends a cycle some way off +x (forward: ~154°); a probe cycle measures by how much."""
     probe = _Gait(params, rect, start_state, forward)
     probe_cycle = probe.centre(4.0) - probe.centre(0.0)
     want = 0.0 if forward else math.pi
-    gait = _Gait(params, rect, start_state, forward, want - math.atan2(probe_cycle[1], probe_cycle[0]))
-    start_centre = gait.centre(0.0)
-    cycle = gait.centre(4.0) - start_centre
-    heading = math.atan2(cycle[1], cycle[0])
-    direction = np.array([math.cos(heading), math.sin(heading), 0.0])
+    return _Gait(params, rect, start_state, forward, want - math.atan2(probe_cycle[1], probe_cycle[0]))
 
-    def net(sigma: float) -> float:
-        return float((gait.centre(sigma) - start_centre) @ direction)
 
-    target = abs(distance_m)
-    per_cycle_net = float(np.linalg.norm(cycle[:2]))
-    legs = 4.0 * (math.ceil(target / per_cycle_net) + 1)  # an upper bound on the legs the gait walks
-    if legs * steps > MAX_GAIT_SAMPLES:
-        field = "distance" if legs * 2 > MAX_GAIT_SAMPLES else "steps"
-        raise InvalidInput(field, f"{distance_m:g} m at {steps} samples per state would need about "
-                                  f"{legs * steps:.3g} samples; at most {MAX_GAIT_SAMPLES} are computed "
-                                  f"(one cycle advances {per_cycle_net:.3g} m)")
-    hi = legs
-    sigma_end = _first_crossing(net if measure == "net" else gait.rolled, target, hi)
-
+def _sample_gait(gait: _Gait, params: Any, sigma_end: float, steps: int, speed: float,
+                 net: Any) -> list[Sample]:
+    """Stage 3: ``steps`` samples per leg up to σ = ``sigma_end``, timed by the sliders' speed (rad/s)."""
     samples: list[Sample] = []
     t_s = 0.0
     last: tuple[float, float] | None = None
@@ -340,6 +309,11 @@ def plan_gait(
                 params,
             )
         )
+    return samples
+
+
+def _state_changes(samples: list[Sample]) -> tuple[list[int], list[dict[str, Any]]]:
+    """Stage 4: the sequence of hybrid states the samples pass through, and each transition (when, where)."""
     sequence = [samples[0].state]
     transitions = []
     for prev, cur in itertools.pairwise(samples):
@@ -354,6 +328,55 @@ def plan_gait(
                     "theta2_rad": cur.theta2,
                 }
             )
+    return sequence, transitions
+
+
+def plan_gait(
+    distance_m: float,
+    profile: RobotProfile,
+    steps: int = 32,
+    start_state: int = 1,
+    corner_deg: float | None = None,
+    measure: str = "net",
+) -> dict[str, Any]:
+    """What ``sphereplan tensegrity gait`` writes: slider trajectories that roll the robot ``distance_m``.
+
+    ``distance_m`` > 0 walks the forward ring 1 → 3 → 2 → 4, < 0 the reverse ring. ``measure`` says what
+    the distance counts: ``"net"`` (default), the advance of O_b along the gait's mean heading (the
+    direction a full cycle moves it), or ``"rolled"``, the contact's ground travel Σ r·|Δφ|. ``steps``
+    samples are taken on every leg (one leg = one state). Raises :class:`InvalidInput` naming the field.
+    """
+    _check_gait_request(distance_m, steps, start_state, measure)
+    params = params_from_profile(profile)
+    section = profile.extra.get("texplor", {})
+    corner = math.radians(
+        corner_deg if corner_deg is not None else float(section.get("gait_corner_deg", 45.0))
+    )
+    speed = float(section.get("slider_speed_rad_s", 0.5))
+    rect = make_rectangle(corner, params)
+    forward = distance_m > 0
+    gait = _oriented_gait(params, rect, start_state, forward)
+    start_centre = gait.centre(0.0)
+    cycle = gait.centre(4.0) - start_centre
+    heading = math.atan2(cycle[1], cycle[0])
+    direction = np.array([math.cos(heading), math.sin(heading), 0.0])
+
+    def net(sigma: float) -> float:
+        return float((gait.centre(sigma) - start_centre) @ direction)
+
+    # 2. how far along the ring (σ, in legs) the distance is reached
+    target = abs(distance_m)
+    per_cycle_net = float(np.linalg.norm(cycle[:2]))
+    legs = 4.0 * (math.ceil(target / per_cycle_net) + 1)  # an upper bound on the legs the gait walks
+    if legs * steps > MAX_GAIT_SAMPLES:
+        field = "distance" if legs * 2 > MAX_GAIT_SAMPLES else "steps"
+        raise InvalidInput(field, f"{distance_m:g} m at {steps} samples per state would need about "
+                                  f"{legs * steps:.3g} samples; at most {MAX_GAIT_SAMPLES} are computed "
+                                  f"(one cycle advances {per_cycle_net:.3g} m)")
+    hi = legs
+    sigma_end = _first_crossing(net if measure == "net" else gait.rolled, target, hi)
+    samples = _sample_gait(gait, params, sigma_end, steps, speed, net)
+    sequence, transitions = _state_changes(samples)
     return {
         "robot": profile.name,
         "radius_m": params.radius_m,

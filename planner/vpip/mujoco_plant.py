@@ -47,11 +47,9 @@ class Observation:
 
 
 def _import_mujoco() -> Any:
-    try:
-        import mujoco
-    except ImportError as exc:  # pragma: no cover - mujoco is a dependency
-        raise InvalidInput("plant", "the mujoco plant needs the 'mujoco' package (pip install mujoco)") from exc
-    return mujoco
+    from planner.extras import require
+
+    return require("mujoco", "plant", "the mujoco plant")
 
 
 def attitude(xmat: np.ndarray) -> tuple[float, float, float]:

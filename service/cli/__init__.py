@@ -25,7 +25,7 @@ from collections.abc import Sequence
 
 from planner import __version__
 from planner.errors import SpherePlanError
-from service.cli._io import set_verbosity
+from service.cli._io import make_output_folders, set_verbosity
 from service.outcome import EXIT_BAD_INPUT, answer_for
 
 
@@ -89,10 +89,14 @@ def main(argv: Sequence[str] | None = None) -> int:
     level = {-1: logging.ERROR, 0: logging.WARNING, 1: logging.INFO, 2: logging.DEBUG}[verbosity]
     logging.basicConfig(level=level, format="%(levelname)s %(name)s: %(message)s", stream=sys.stderr)
     try:
+        make_output_folders(args)
         return int(args.func(args))
     except SpherePlanError as exc:
         answer = answer_for(exc)
-        sys.stderr.write(f"sphereplan {args.verb}: {answer.cli_label}: {exc}\n")
+        text = str(exc)
+        # one prefix per message: a planner message that already starts with the label ("no path: ...") keeps its own
+        label = "" if text.startswith(f"{answer.cli_label}:") else f"{answer.cli_label}: "
+        sys.stderr.write(f"sphereplan {args.verb}: {label}{text}\n")
         return answer.exit_code
     except RecursionError:  # json.loads of an absurdly nested --options or input file
         sys.stderr.write(f"sphereplan {args.verb}: error: an input is nested too deeply\n")

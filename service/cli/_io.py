@@ -37,15 +37,32 @@ def positive_float(text: str) -> float:
 
 
 def add_degrees_flag(parser: argparse.ArgumentParser) -> None:
-    """``--degrees``: the one spelling, on every command that reads an angle (the output stays radians)."""
+    """``--degrees``: the one spelling, on every command that reads an angle (the output stays radians).
+
+    The rule: options whose names say their unit (``--roll-deg``) are in that unit whatever ``--degrees`` says;
+    ``--degrees`` converts the others. Either way an angle must lie in [−2π, 2π] rad (±360°)."""
     parser.add_argument(
-        "--degrees", action="store_true", help="input angles are in degrees (output stays radians)"
+        "--degrees", action="store_true",
+        help="input angles are in degrees (output stays radians; options named --...-deg are degrees anyway)"
     )
 
 
-def angle(args: argparse.Namespace, value: float) -> float:
-    """An angle as typed, in radians (``--degrees`` converts)."""
-    return math.radians(value) if getattr(args, "degrees", False) else value
+def angle(args: argparse.Namespace, value: float, field: str) -> float:
+    """An angle as typed, in radians (``--degrees`` converts); outside [−2π, 2π] rad it is bad input naming
+    ``field`` and suggesting ``--degrees`` (:func:`planner.angles.check_angle`, the rule of every door)."""
+    from planner.angles import check_angle
+
+    rad = math.radians(value) if getattr(args, "degrees", False) else value
+    return check_angle(field, rad, "--degrees")
+
+
+def angle_deg(value: float, field: str) -> float:
+    """An option that is in degrees by its name (``--roll-deg``), checked by the same rule (±360°); returns
+    the degrees unchanged."""
+    from planner.angles import check_angle
+
+    check_angle(field, math.radians(value), f"{field} (already degrees; within ±360)")
+    return value
 
 
 #: -1 with ``-q`` (errors only), 0 by default (progress), 1 with ``-v`` (and log INFO), 2 with ``-vv`` (DEBUG)
@@ -116,19 +133,50 @@ class Stages:
             self.stream.write(f"sphereplan {self.verb}: done in {time.perf_counter() - self.started:.2f} s\n")
 
 
+def make_folder(folder: str | Path, field: str) -> Path:
+    """``folder`` (an output folder a user named), created with its parents if missing; a file in the way or a
+    refusal of the file system is bad input naming ``field``."""
+    p = Path(folder)
+    try:
+        p.mkdir(parents=True, exist_ok=True)
+    except FileExistsError:
+        raise InvalidInput(field, f"{p} (or a folder above it) is a file, not a folder") from None
+    except OSError as exc:
+        raise InvalidInput(field, f"cannot create folder {p}: {exc.strerror or exc}") from None
+    return p
+
+
 def check_output(path: str | Path | None, field: str, formats: set[str] | None = None) -> None:
-    """Before any work: ``path`` (an option naming a file to write) must be a file in an existing folder,
-    with one of ``formats`` as its extension when given; else :class:`InvalidInput` naming ``field``."""
+    """Before any work: ``path`` (an option naming a file to write) must be a file name, with one of ``formats``
+    as its extension when given; its folder is created if missing (:func:`make_folder`); else
+    :class:`InvalidInput` naming ``field``."""
     if not path:
         return
     p = Path(path)
     if p.is_dir():
         raise InvalidInput(field, f"{p} is a folder; give a file name")
-    if not p.parent.is_dir():
-        raise InvalidInput(field, f"folder {p.parent} does not exist")
     if formats is not None and p.suffix.lower().lstrip(".") not in formats:
         raise InvalidInput(field, f"unsupported image format {p.suffix or '(none)'!r}; use one of "
                                   f"{', '.join(sorted(formats))}")
+    make_folder(p.parent, field)
+
+
+#: the options, on any verb, that name a file to write (their folders are created) or a folder to write into
+OUTPUT_FILES = {"out": "--out", "plot": "--plot", "csv": "--csv", "png": "--png"}
+OUTPUT_FOLDERS = {"out_dir": "--out-dir"}
+
+
+def make_output_folders(args: argparse.Namespace) -> None:
+    """Create the folders every output option of a verb names (``--out runs/a.json`` makes ``runs/``), so no verb
+    fails after its work for want of a folder; a file in the way is bad input naming the option."""
+    for attr, field in OUTPUT_FILES.items():
+        value = getattr(args, attr, None)
+        if isinstance(value, str) and value and not Path(value).is_dir():
+            make_folder(Path(value).parent, field)
+    for attr, field in OUTPUT_FOLDERS.items():
+        value = getattr(args, attr, None)
+        if isinstance(value, str) and value:
+            make_folder(value, field)
 
 
 def plot_formats() -> set[str]:
@@ -196,11 +244,34 @@ def read_bag_map(path: str, topic: str | None) -> OccupancyGrid:
     return read_map_from_bag(path, topic or MAP_TOPIC)
 
 
+def map_path(text: str, field: str = "--map") -> str:
+    """What a ``--map`` names, as a path: a file or folder that exists (relative to the current folder), else a
+    shipped map by name (``garage``, as HTTP and docs/maps.md name them), else a shipped file by its path in the
+    repository (``maps/garage.yaml`` from any folder); otherwise bad input naming ``field``."""
+    if Path(text).exists():
+        return text
+    from planner.errors import NotFound
+    from planner.maps.catalogue import default_maps_dir, map_files
+
+    try:
+        folder = default_maps_dir()
+    except NotFound:
+        raise InvalidInput(field, f"{text} does not exist") from None
+    index = map_files(folder)
+    if text in index:
+        return str(index[text])
+    shipped = folder.parent / text
+    if not Path(text).is_absolute() and shipped.exists():
+        return str(shipped)
+    names = ", ".join(sorted(index)) or "none"
+    raise InvalidInput(field, f"{text} does not exist, and it is not a shipped map (names: {names})")
+
+
 def read_map_arg(path: str, topic: str | None, robot: Any = None) -> OccupancyGrid:
-    """``--map`` of a verb: a map_server YAML or mesh (``planner.maps.load.load_any``), or with an MCAP
-    file / rosbag2 folder the last ``nav_msgs/OccupancyGrid`` on ``--map-topic`` (default ``/map``)."""
-    if not Path(path).exists():
-        raise InvalidInput("--map", f"{path} does not exist")
+    """``--map`` of a verb (:func:`map_path`: a file, a shipped map's name or a shipped file from any folder): a
+    map_server YAML or mesh (``planner.maps.load.load_any``), or with an MCAP file / rosbag2 folder the last
+    ``nav_msgs/OccupancyGrid`` on ``--map-topic`` (default ``/map``)."""
+    path = map_path(path)
     if is_bag(path):
         return read_bag_map(path, topic)
     if topic is not None:

@@ -97,7 +97,7 @@ def run_real(args: argparse.Namespace) -> int:
 
     per_problem = 1 if args.no_reference else 3
     with tqdm(total=len(paths) * args.per_map * per_problem, file=sys.stderr, desc="bench real",
-              disable=quiet()) as bar:
+              disable=quiet() or not sys.stderr.isatty()) as bar:
 
         def progress(msg: str) -> None:
             bar.set_postfix_str(msg[:40])
@@ -180,7 +180,8 @@ def run(args: argparse.Namespace) -> int:
     from tqdm import tqdm
 
     planners = 1 + (args.ompl_time > 0) + (args.rrt_time > 0)
-    with tqdm(total=len(problems) * planners, file=sys.stderr, desc="bench", disable=quiet()) as bar:
+    with tqdm(total=len(problems) * planners, file=sys.stderr, desc="bench",
+              disable=quiet() or not sys.stderr.isatty()) as bar:
 
         def progress(msg: str) -> None:
             bar.set_postfix_str(msg[:40])

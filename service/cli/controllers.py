@@ -11,13 +11,23 @@ sphereplan controllers bench                                       controller st
 from __future__ import annotations
 
 import argparse
-import math
 import sys
 from pathlib import Path
 from typing import Any
 
 from planner.errors import InvalidInput
-from service.cli._io import emit_json, finite_float, positive_float, seed_int
+from service.cli._io import (
+    add_degrees_flag,
+    angle,
+    emit_json,
+    finite_float,
+    make_folder,
+    map_path,
+    positive_float,
+    say,
+    seed_int,
+)
+from service.outcome import EXIT_NO_SOLUTION
 
 VERB = "controllers"
 HELP = "pendulum-sphere motion control (paper 001 §5–6): LMPC/RSLQR vs PID steps, Figs. 10–13, tuning, timing"
@@ -50,7 +60,7 @@ def _step(args: argparse.Namespace) -> int:
 def _roll(args: argparse.Namespace) -> int:
     from planner.pendulum.steps import roll_step
 
-    roll = math.radians(args.roll) if args.degrees else args.roll
+    roll = angle(args, args.roll, "--roll")
     result = roll_step(args.robot, args.controller, args.speed, roll, args.duration)
     if args.plot:
         from planner.pendulum.plot import plot_step
@@ -65,8 +75,8 @@ def _figures(args: argparse.Namespace) -> int:
     from planner.pendulum.plot import plot_fig11, plot_fig12, plot_fig13
 
     folder = Path(args.out_dir) if args.out_dir else None
-    if folder is not None and not folder.is_dir():
-        raise InvalidInput("out_dir", f"folder {folder} does not exist")
+    if folder is not None:
+        make_folder(folder, "--out-dir")
     figs = run_figures(args.robot)
     if folder is not None:
         stem = f"pendulum-{figs['robot']}"
@@ -133,7 +143,7 @@ def _patrol(args: argparse.Namespace) -> int:
     goals = [_pose(g, f"goal[{i}]") for i, g in enumerate(args.goal)] if args.goal else list(GARAGE_PATROL)
     if len(goals) < 2:
         raise InvalidInput("goal", "give a start and at least one goal (--goal X Y YAW, repeated)")
-    grid = load_map(args.map)
+    grid = load_map(map_path(args.map))
     robot = load_robot(args.robot)
     result = patrol(grid, robot, goals, model=args.model, seed=args.seed, noise=args.noise)
     if args.plot:
@@ -141,6 +151,11 @@ def _patrol(args: argparse.Namespace) -> int:
 
         plot_simulation(grid, result["plan"], result, args.plot)
     _emit(result, args.out)
+    worst = result["patrol"]["true_error_max_m"]
+    if result["status"] != "reached":  # written for a look; the exit code says it failed (as simulate's)
+        say("controllers", f"patrol FAILED: {result['error_msg']}; worst true goal error {worst:.2f} m")
+        return EXIT_NO_SOLUTION
+    say("controllers", f"patrol reached its last goal; worst true goal error {worst:.2f} m (GNSS denied)")
     return 0
 
 
@@ -164,7 +179,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     roll.add_argument("--controller", choices=("rslqr", "pid"), required=True)
     roll.add_argument("--speed", type=finite_float, required=True, metavar="V", help="rolling speed (m/s)")
     roll.add_argument("--roll", type=finite_float, required=True, metavar="PHI", help="desired roll (rad)")
-    roll.add_argument("--degrees", action="store_true", help="--roll in degrees")
+    add_degrees_flag(roll)
     roll.add_argument("--duration", type=positive_float, default=4.0, metavar="S", help="run after the step (4 s)")
     roll.add_argument("--out", metavar="F.json", help="write the result here (default: stdout)")
     roll.add_argument("--plot", metavar="F.png", help="draw roll, pendulum roll and torque")

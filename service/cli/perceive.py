@@ -83,9 +83,9 @@ def run(args: argparse.Namespace) -> int:
     check_output(args.plot, "--plot", {"png", "pdf", "svg"})
     check_output(args.disparity, "--disparity", {"png", "npy"})
     x, y = args.pose[0], args.pose[1]
-    yaw = check_angle(angle(args, args.pose[2]), "--pose YAW")
-    roll = check_angle(angle(args, args.roll), "--roll")
-    pitch = check_angle(angle(args, args.pitch), "--pitch")
+    yaw = check_angle(angle(args, args.pose[2], "--pose YAW"), "--pose YAW")
+    roll = check_angle(angle(args, args.roll, "--roll"), "--roll")
+    pitch = check_angle(angle(args, args.pitch, "--pitch"), "--pitch")
     if args.min_height < 0:
         raise InvalidInput("--min-height", "must be ≥ 0")
     try:

@@ -71,7 +71,7 @@ def _query(args: argparse.Namespace) -> PlanQuery:
     if args.forward_only:
         options["allow_reverse"] = False
     (x0, y0, yaw0), (x1, y1, yaw1) = args.start, args.goal
-    start, goal = (x0, y0, angle(args, yaw0)), (x1, y1, angle(args, yaw1))
+    start, goal = (x0, y0, angle(args, yaw0, "--start")), (x1, y1, angle(args, yaw1, "--goal"))
     termination = Termination() if args.time_limit is None else Termination(args.time_limit)
     return PlanQuery(start, goal, PlannerOptions.from_dict(options), termination)
 
@@ -126,7 +126,9 @@ def run(args: argparse.Namespace) -> int:
             title = f"{grid.name}: {robot.name}, {result.length_m:.2f} m in {result.planning_time_s * 1000:.0f} ms"
             write_file(args.plot, "--plot",
                        lambda: plot_plan(grid, robot, result.states, query.start, query.goal, args.plot, title=title))
-    if args.out:  # stdout is free: say where the result went (the README promised output)
-        say("plan", f"{result.length_m:.2f} m in {result.planning_time_s * 1000:.0f} ms, "
-                    f"wrote {args.out}{' and ' + args.plot if args.plot else ''}")
+    went = f"wrote {args.out}" if args.out else "printed the JSON"
+    extra = result.extra
+    backwards = f", {extra['reverse_length_m']:.2f} m of it backwards" if extra.get("reverse_states") else ""
+    say("plan", f"{result.length_m:.2f} m{backwards} in {result.planning_time_s * 1000:.0f} ms "
+                f"({extra['search']} search), {went}{' and ' + args.plot if args.plot else ''}")
     return EXIT_OK

@@ -5,7 +5,16 @@ from __future__ import annotations
 import argparse
 from typing import TYPE_CHECKING, Any
 
-from service.cli._io import add_degrees_flag, emit_result, finite_float, is_bag, positive_float, read_bag_map
+from service.cli._io import (
+    add_degrees_flag,
+    emit_result,
+    finite_float,
+    is_bag,
+    map_path,
+    positive_float,
+    read_bag_map,
+    say,
+)
 
 #: planner.spherobot.request.METHODS, repeated so that --help does not import the planner (1.5 s; a test
 #: keeps the two equal)
@@ -63,7 +72,7 @@ if TYPE_CHECKING:
 def _load_map(path: str) -> OccupancyGrid:
     from planner.maps.nav2 import load_map
 
-    return load_map(path)
+    return load_map(map_path(path))
 
 
 def request_from_args(args: argparse.Namespace) -> dict[str, Any]:
@@ -98,4 +107,7 @@ def run(args: argparse.Namespace) -> int:
         from planner.spherobot.plot import plot_reconfiguration
 
         plot_reconfiguration(result, args.plot, grid)
+    say("reconfigure", f"{result['method']} ({result['mode']}): {result['length_m']:.2f} m rolled in "
+                       f"{result['duration_s']:.1f} s, planned in {result['planning_time_s'] * 1000:.0f} ms"
+                       f"{', wrote ' + args.out if args.out else ''}")
     return 0

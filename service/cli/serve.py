@@ -130,6 +130,25 @@ def check_zenoh_door(config_path: Path | None, listen: str, has_token: bool, ins
                                      "with a --zenoh-config that has user/password and access control instead")
 
 
+def check_listen_port(endpoint: str, field: str) -> None:
+    """Refuse, before any worker is started, a ``tcp/HOST:PORT`` endpoint whose port is already taken (7447 is
+    also where a ROS 2 Zenoh router listens): bad input naming ``field``, one line, not a traceback."""
+    import socket
+
+    kind, _, address = endpoint.partition("/")
+    host, _, port_text = address.rpartition(":")
+    if kind != "tcp" or not port_text.isdigit() or not host:
+        return
+    host = host.strip("[]")
+    family = socket.AF_INET6 if ":" in host else socket.AF_INET
+    with socket.socket(family, socket.SOCK_STREAM) as probe:
+        try:
+            probe.bind((host, int(port_text)))
+        except OSError as exc:
+            raise InvalidInput(field, f"cannot listen on {endpoint}: {exc.strerror or exc} (another program, e.g. "
+                                      "a Zenoh router, holds it); choose another endpoint or give --no-zenoh") from None
+
+
 def settings_from_args(args: argparse.Namespace) -> ServiceSettings:
     from planner.maps.catalogue import default_maps_dir
 
@@ -139,6 +158,8 @@ def settings_from_args(args: argparse.Namespace) -> ServiceSettings:
     zenoh_config = Path(args.zenoh_config) if args.zenoh_config else None
     if zenoh_config is not None and not zenoh_config.is_file():
         raise InvalidInput("--zenoh-config", f"{zenoh_config} is not a file")
+    if not args.no_zenoh and zenoh_config is None:
+        check_listen_port(args.zenoh_listen, "--zenoh-listen")
     token = read_token(args.token_file) if args.token_file else None
     if token is None and not loopback_host(args.host) and not args.insecure:
         raise InvalidInput("--host", f"{args.host} is not a loopback address: give --token-file (or --insecure to "

@@ -3,6 +3,11 @@
 sphereplan simulate --map M.yaml --path PLAN.json [--robot P] [--seed N] [--noise none|default]
                     [--tracker mpc|pursuit] [--model kinematic|dynamic] --out SIM.json [--plot SIM.png]
 sphereplan simulate --track [--map M.yaml] ...     paper 001's 16.2 m × 8.4 m clockwise lap
+
+Exit 0 when the robot reached the path's end without a collision, 3 when it collided or did not reach it (the
+result is written either way, with ``status: failed`` and ``error_msg`` saying why), 2 on bad input — including
+a plan made on another map or for another robot than the ones given (``--allow-other-map``,
+``--allow-other-robot`` roll it anyway).
 """
 
 from __future__ import annotations
@@ -11,7 +16,8 @@ import argparse
 from typing import Any
 
 from planner.errors import InvalidInput
-from service.cli._io import Stages, emit_result, is_bag, positive_float, read_bag_map, read_json_file, say, seed_int
+from service.cli._io import Stages, emit_result, is_bag, positive_float, read_json_file, read_map_arg, say, seed_int
+from service.outcome import EXIT_NO_SOLUTION, EXIT_OK
 
 VERB = "simulate"
 HELP = "roll a plan in closed loop (paper 001 MPC + odometry/GNSS fusion) and report tracking metrics"
@@ -37,6 +43,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "nav_msgs/OccupancyGrid (optional with --track: open field)"
     )
     parser.add_argument("--map-topic", metavar="TOPIC", help="topic of the map in an MCAP/rosbag2 --map (/map)")
+    parser.add_argument("--allow-other-map", action="store_true",
+                        help="roll the plan even if it was made on another map than --map (refused otherwise)")
+    parser.add_argument("--allow-other-robot", action="store_true",
+                        help="roll the plan with --robot even if it was made for another robot (refused otherwise)")
     parser.add_argument("--robot", metavar="P", help="robot profile name or TOML (default: the plan's robot)")
     parser.add_argument("--seed", type=seed_int, default=0, help="seed of every disturbance (default 0)")
     parser.add_argument("--noise", choices=("none", "default"), default="default", help="disturbances")
@@ -84,7 +94,7 @@ def _read_plan(path: str) -> dict[str, Any]:
 def run(args: argparse.Namespace) -> int:
     import numpy as np
 
-    from planner.closed_loop.simulate import SimulationOptions, simulate_plan
+    from planner.closed_loop.simulate import SimulationOptions, check_plan_fits, simulate_plan
     from planner.closed_loop.tracker import MPCParams
     from planner.occupancy import OccupancyGrid
     from planner.robot import RobotProfile, load_robot
@@ -93,12 +103,8 @@ def run(args: argparse.Namespace) -> int:
     if not args.path and not args.track:
         raise InvalidInput("path", "give --path PLAN.json or --track")
     given = _read_plan(args.path) if args.path else None
-    if args.map and is_bag(args.map):
-        grid = read_bag_map(args.map, args.map_topic)
-    elif args.map:
-        from planner.maps.nav2 import load_map  # the map loader (ROS map_server YAML + PGM)
-
-        grid = load_map(args.map)
+    if args.map:
+        grid = read_map_arg(args.map, args.map_topic)
     elif args.track:
         grid = OccupancyGrid.from_occupied(
             np.zeros((248, 404), dtype=bool), 0.05, (-2.0, -2.0, 0.0), name="field"
@@ -120,6 +126,11 @@ def run(args: argparse.Namespace) -> int:
         assert given is not None
         plan = given
         robot = load_robot(args.robot) if args.robot else None
+        # a map read from a bag is named after the bag, not the map: compared only for map files
+        check_plan_fits(plan, None if is_bag(args.map) else grid.name, robot.name if robot is not None else None,
+                        allow_other_map=args.allow_other_map, allow_other_robot=args.allow_other_robot,
+                        map_field="--map", robot_field="--robot", map_flag="--allow-other-map",
+                        robot_flag="--allow-other-robot")
 
     options = SimulationOptions(
         control_rate_hz=args.rate,
@@ -140,16 +151,19 @@ def run(args: argparse.Namespace) -> int:
 
     emit_result(result, args.out, lambda out: write_simulation_mcap(out, plan, result, grid))
     m = result["metrics"]
-    if args.out:
-        verdict = "reached the goal" if m["reached_goal"] else "did NOT reach the goal"
-        if m["stopped_at_estimated_goal"] and not m["reached_goal"]:
-            verdict += " (it stopped where its estimate put the goal)"
-        say(
-            "simulate",
-            f"{verdict}: true end {m['final_position_error_m']:.3f} m from the path's end, estimate "
-            f"{m['estimate_error_final_m']:.3f} m off the truth; cross-track rms {m['cross_track_rms_m']:.3f} m, "
-            f"max {m['cross_track_max_m']:.3f} m; clearance {m['min_clearance_m']:.3f} m; "
-            f"fallback steps {m['fallback_steps']}; fused error max {m['estimate_error_max_m']:.3f} m vs "
-            f"odometry {m['odometry_error_max_m']:.3f} m",
-        )
-    return 0
+    verdict = "reached the goal" if m["reached_goal"] else "did NOT reach the goal"
+    if m["stopped_at_estimated_goal"] and not m["reached_goal"]:
+        verdict += " (it stopped where its estimate put the goal)"
+    if m["collided"]:
+        verdict += ", COLLIDED"
+    say(
+        "simulate",
+        f"{verdict}: true end {m['final_position_error_m']:.3f} m from the path's end, estimate "
+        f"{m['estimate_error_final_m']:.3f} m off the truth; cross-track rms {m['cross_track_rms_m']:.3f} m, "
+        f"max {m['cross_track_max_m']:.3f} m; clearance {m['min_clearance_m']:.3f} m; "
+        f"fallback steps {m['fallback_steps']}; fused error max {m['estimate_error_max_m']:.3f} m vs "
+        f"odometry {m['odometry_error_max_m']:.3f} m",
+    )
+    if result["status"] != "reached":  # the result is written for a look; the exit code says it failed
+        return EXIT_NO_SOLUTION
+    return EXIT_OK

@@ -72,8 +72,8 @@ def _one(args: argparse.Namespace, info: Any) -> dict[str, Any]:
     from planner.perception.image_io import read_image, write_image
     from planner.perception.mount import check_angle
 
-    roll = check_angle(angle(args, args.roll), "--roll")
-    pitch = check_angle(angle(args, args.pitch), "--pitch")
+    roll = check_angle(angle(args, args.roll, "--roll"), "--roll")
+    pitch = check_angle(angle(args, args.pitch, "--pitch"), "--pitch")
     image = read_image(args.image, "--image")
     out, valid = stabilise(image, info, roll, pitch, "--image")
     write_image(args.out, out, "--out")

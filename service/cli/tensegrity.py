@@ -6,7 +6,7 @@ import argparse
 import math
 
 from planner.errors import InvalidInput
-from service.cli._io import Stages, add_degrees_flag, angle, emit_json, finite_float
+from service.cli._io import Stages, add_degrees_flag, angle, emit_json, finite_float, say
 
 VERB = "tensegrity"
 HELP = "two-arc tensegrity robot (TeXploR): static states, rolling gaits, form finding"
@@ -67,7 +67,8 @@ def _run_static(args: argparse.Namespace) -> int:
     from planner.tensegrity import static_equilibria
 
     result = static_equilibria(
-        angle(args, args.theta1), angle(args, args.theta2), load_robot(args.robot), not args.no_verify
+        angle(args, args.theta1, "--theta1"), angle(args, args.theta2, "--theta2"), load_robot(args.robot),
+        not args.no_verify,
     )
     emit_json(result, args.out)
     return 0
@@ -81,7 +82,7 @@ def _run_gait(args: argparse.Namespace) -> int:
 
     if not args.out:
         raise InvalidInput("out", "the gait JSON is long; give --out FILE.json")
-    corner_deg = None if args.corner is None else math.degrees(angle(args, args.corner))
+    corner_deg = None if args.corner is None else math.degrees(angle(args, args.corner, "--corner"))
     with Stages("tensegrity gait", ["plan the gait", *(["plot"] if args.plot else [])]) as stages:
         stages.start("plan the gait")
         profile = load_robot(args.robot)
@@ -90,6 +91,8 @@ def _run_gait(args: argparse.Namespace) -> int:
             stages.start("plot")
             plot_gait(result, params_from_profile(profile), args.plot)
     emit_json(result, args.out)
+    say("tensegrity gait", f"{result['net_displacement_m']:.3f} m net in {result['duration_s']:.1f} s through states "
+                           f"{result['state_sequence']}, wrote {args.out}{' and ' + args.plot if args.plot else ''}")
     return 0
 
 

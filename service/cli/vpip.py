@@ -14,6 +14,7 @@ from service.cli._io import (
     Stages,
     add_degrees_flag,
     angle,
+    angle_deg,
     emit_json,
     finite_float,
     is_mcap_out,
@@ -31,10 +32,10 @@ def _rods(args: argparse.Namespace) -> int:
 
     emit_json(
         api.rods_report(
-            angle(args, args.phi_vpip),
-            angle(args, args.theta_vpip),
-            angle(args, args.roll),
-            angle(args, args.pitch_phase),
+            angle(args, args.phi_vpip, "--phi-vpip"),
+            angle(args, args.theta_vpip, "--theta-vpip"),
+            angle(args, args.roll, "--roll"),
+            angle(args, args.pitch_phase, "--pitch-phase"),
             args.robot,
         ),
         None,
@@ -45,7 +46,7 @@ def _rods(args: argparse.Namespace) -> int:
 def _radius(args: argparse.Namespace) -> int:
     from planner.vpip import api
 
-    emit_json(api.radius_report(angle(args, args.roll), args.robot), None)
+    emit_json(api.radius_report(angle(args, args.roll, "--roll"), args.robot), None)
     return 0
 
 
@@ -103,16 +104,16 @@ def _circle(args: argparse.Namespace) -> int:
 
     if not 0 < args.duration <= 600:
         raise InvalidInput("duration", f"must be in (0, 600] s, got {args.duration}")
-    theta = None if args.theta_deg is None else math.radians(args.theta_deg)
+    theta = None if args.theta_deg is None else math.radians(angle_deg(args.theta_deg, "--theta-deg"))
     result = api.circle_report(
-        math.radians(args.roll_deg),
+        math.radians(angle_deg(args.roll_deg, "--roll-deg")),
         args.robot,
         args.plant,
         args.duration,
         args.driver,
         args.omega,
         theta,
-        heading_rad=math.radians(args.heading_deg),
+        heading_rad=math.radians(angle_deg(args.heading_deg, "--heading-deg")),
         contact=args.contact,
         gains=args.gains,
     )
@@ -251,6 +252,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         default=0.0,
         help="start heading (deg, default 0); repeat a MuJoCo run at other headings to see its spread",
     )
+    add_degrees_flag(circ)  # accepted on every angle-taking command; the --...-deg options are degrees anyway
     common(circ)
     settings(circ)
     circ.set_defaults(func=_circle)

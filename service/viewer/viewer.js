@@ -16,7 +16,7 @@ const viewer = {
 };
 window.viewer = viewer;
 
-function status(text) { $("status").textContent = text; }
+function status(text) { $("status").textContent = text; $("status").title = text; }
 const fmt = (v, unit, digits = 2) => (v === null || v === undefined ? "–" : `${Number(v).toFixed(digits)} ${unit}`);
 
 async function api(method, path, body) {
@@ -27,7 +27,9 @@ async function api(method, path, body) {
   const data = await response.json();
   if (!response.ok) {
     const where = data.field ? ` (${data.field})` : "";
-    throw new Error(`${response.status} ${data.error_code}: ${data.error_msg}${where}`);
+    const error = new Error(`${response.status} ${data.error_code}: ${data.error_msg}${where}`);
+    error.body = data;  // a failed plan or simulation still says what it did
+    throw error;
   }
   return data;
 }
@@ -135,6 +137,22 @@ function draw() {
 
 // ------------------------------------------------------------------------------------ numbers
 
+// the cells of each result panel: cleared on every new request and on failure, so no number outlives its answer
+const PANELS = {
+  plan: ["n-status", "n-length", "n-duration", "n-time", "n-expansions", "n-clearance", "n-roll", "n-why"],
+  sim: ["s-status", "s-why", "s-rms", "s-max", "s-final", "s-est"],
+  rec: ["r-status", "r-why", "r-mode", "r-length", "r-pos", "r-p"],
+};
+function clearPanel(kind) {
+  viewer[kind] = null;
+  for (const id of PANELS[kind]) { $(id).textContent = "–"; $(id).classList.remove("failed"); }
+}
+function showFailure(kind, why) {
+  const cell = $(kind === "plan" ? "n-status" : `${kind[0]}-status`);
+  cell.textContent = "failed"; cell.classList.add("failed");
+  $(kind === "plan" ? "n-why" : `${kind[0]}-why`).textContent = why;
+}
+
 function showPlan(plan) {
   $("n-status").textContent = plan.status;
   $("n-length").textContent = fmt(plan.length_m, "m");
@@ -159,7 +177,7 @@ function refreshControls() {
 // ------------------------------------------------------------------------------------ map loading
 
 async function loadMap(name) {
-  viewer.ready = false; viewer.plan = viewer.sim = viewer.rec = null; refreshControls();
+  viewer.ready = false; viewer.error = null; clearPanel("plan"); clearPanel("sim"); clearPanel("rec"); refreshControls();
   status(`loading ${name}…`);
   const info = await api("GET", `/v1/maps/${encodeURIComponent(name)}`);
   const image = new Image();
@@ -206,43 +224,62 @@ window.addEventListener("mouseup", () => {
   dragging = null;
 });
 
-async function run(label, fn) {
-  viewer.busy = true; viewer.error = null; refreshControls(); status(`${label}…`);
+// run one request: its panel (and those that depend on it) is cleared first; a failure says "failed" and why
+async function run(label, kind, fn) {
+  viewer.busy = true; viewer.error = null;
+  for (const k of { plan: ["plan", "sim", "rec"], sim: ["sim", "rec"], rec: ["plan", "sim", "rec"] }[kind]) clearPanel(k);
+  refreshControls(); draw(); status(`${label}…`);
   try {
-    await fn();
+    const failure = await fn();
+    if (failure) throw failure;
     status(`${label}: done`);
   } catch (err) {
     viewer.error = err.message;
+    showFailure(kind, err.body?.error_msg || err.message);
     status(`${label} failed: ${err.message}`);
   } finally {
     viewer.busy = false; refreshControls(); draw();
   }
 }
 
-$("plan").addEventListener("click", () => run("plan", async () => {
+$("plan").addEventListener("click", () => run("plan", "plan", async () => {
   const body = { map: viewer.map, robot: $("robot").value, start: viewer.start, goal: viewer.goal };
-  viewer.lastRequest = body; viewer.plan = viewer.sim = null;
+  viewer.lastRequest = body;
   $("n-status").textContent = "planning";
   const plan = await api("POST", "/v1/plan", body);
   viewer.plan = plan;
   showPlan(plan);
 }));
 
-$("simulate").addEventListener("click", () => run("simulate", async () => {
-  const sim = await api("POST", "/v1/simulate", { map: viewer.map, path: viewer.plan, robot: viewer.plan.robot.name });
-  viewer.sim = sim;
+function showSim(sim) {
   const m = sim.metrics;
+  $("s-status").textContent = sim.status;
   $("s-rms").textContent = fmt(m.cross_track_rms_m, "m", 3);
   $("s-max").textContent = fmt(m.cross_track_max_m, "m", 3);
   $("s-final").textContent = fmt(m.final_position_error_m, "m", 3);
   $("s-est").textContent = fmt(m.estimate_error_max_m, "m", 3);
+}
+
+$("simulate").addEventListener("click", () => run("simulate", "sim", async () => {
+  const request = { map: viewer.map, path: viewer.plan, robot: viewer.plan.robot.name };
+  try {
+    viewer.sim = await api("POST", "/v1/simulate", request);
+  } catch (err) {
+    if (!err.body?.metrics) throw err;
+    viewer.sim = err.body;  // the robot collided or missed the goal: draw what it did, and say it failed
+    showSim(err.body);
+    return err;
+  }
+  showSim(viewer.sim);
+  return null;
 }));
 
-$("reconfigure").addEventListener("click", () => run("reconfigure", async () => {
+$("reconfigure").addEventListener("click", () => run("reconfigure", "rec", async () => {
   const rec = await api("POST", "/v1/reconfigure", {
     map: viewer.map, start: [viewer.start.x, viewer.start.y], goal: [viewer.goal.x, viewer.goal.y],
   });
   viewer.rec = rec;
+  $("r-status").textContent = rec.status;
   $("r-mode").textContent = `${rec.method} / ${rec.mode}`;
   $("r-length").textContent = fmt(rec.length_m, "m");
   $("r-pos").textContent = fmt(rec.final.position_error_m * 1000, "mm", 2);

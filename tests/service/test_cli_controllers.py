@@ -46,7 +46,7 @@ def test_roll_step_prints_json(capsys: pytest.CaptureFixture[str]) -> None:
         (["roll", "--controller", "rslqr", "--speed", "1", "--roll", "0.5"], "roll"),
         (["roll", "--controller", "rslqr", "--speed", "1", "--roll", "nan"], "--roll"),
         (["step", "--controller", "mpc", "--speed", "1"], "--controller"),
-        (["figures", "--out-dir", "/nonexistent/folder"], "out_dir"),
+        (["figures", "--out-dir", "/dev/null/folder"], "--out-dir"),  # a missing folder is made; a file in the way
         (["patrol", "--goal", "3.5", "8.05", "0"], "goal"),
     ],
 )

@@ -60,8 +60,9 @@ def test_simulate_a_plan_writes_sim_json_and_plot(field_map: str, plan_file: str
 def test_track_without_map(tmp_path: Path) -> None:
     out = tmp_path / "track.json"
     code = main(["simulate", "--track", "--tracker", "pursuit", "--time-limit", "4", "--out", str(out)])
-    assert code == 0
+    assert code == 3  # stopped after 4 simulated seconds, short of the lap's end: written, and said to have failed
     sim = json.loads(out.read_text())
+    assert sim["status"] == "failed" and "stopped at 4.0 s" in sim["error_msg"]
     assert sim["metrics"]["duration_s"] == pytest.approx(4.0)
     assert sim["metrics"]["mpc_solve_ms_p50"] is None  # no MPC ran
 

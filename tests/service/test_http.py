@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import asyncio
+import base64
+import gzip
 import io
 import json
 import math
@@ -131,7 +133,7 @@ def test_tensegrity_static_equals_cli(client: httpx.Client, tmp_path: Path) -> N
     out = tmp_path / "static.json"
     assert cli_main(["tensegrity", "static", "--theta1", "30", "--theta2", "60", "--degrees", "--out", str(out)]) == 0
     assert response.json() == json.loads(out.read_text())
-    bad = client.post("/v1/tensegrity/static", json={"theta1": "30", "theta2": 60})
+    bad = client.post("/v1/tensegrity/static", json={"theta1": "30", "theta2": 0.6})
     assert bad.status_code == 422 and bad.json()["field"] == "theta1"
     unknown = client.post("/v1/tensegrity/static", json={"theta1": 0.1, "theta2": 0.2, "robot": "nobody"})
     assert unknown.status_code == 404
@@ -176,7 +178,10 @@ def test_vpip_rods_and_schedule_equal_cli(client: httpx.Client, tmp_path: Path,
 
 
 def _huge_grid() -> dict[str, Any]:
-    return {"data": [[0] * 501] * 500, "resolution_m": 0.1}
+    """A nav_msgs/OccupancyGrid of 2001 × 2000 cells: one row more than the 4 M cells a request may carry."""
+    cells = base64.b64encode(gzip.compress(bytes(2001 * 2000))).decode()
+    return {"info": {"resolution": 0.05, "width": 2001, "height": 2000, "origin": {"position": {"x": 0.0, "y": 0.0}}},
+            "data_gzip_b64": cells}
 
 
 BAD_REQUESTS: list[tuple[str, Any, int, str | None, int]] = [

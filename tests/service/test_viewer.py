@@ -8,6 +8,7 @@ import math
 import shutil
 from collections.abc import Iterator
 from pathlib import Path
+from typing import Any
 
 import httpx
 import pytest
@@ -39,6 +40,26 @@ def test_viewer_files_are_served_without_external_resources(server: Server) -> N
         assert client.get("/viewer/nope.js").status_code == 404
         for text in (page.text, client.get("/viewer/viewer.js").text, client.get("/viewer/viewer.css").text):
             assert "http://" not in text and "https://" not in text and "//cdn" not in text
+
+
+def layout(page: Any) -> list[float]:
+    """Where the canvas and the side panel are and how tall the header is (CSS px)."""
+    return page.evaluate("""() => {
+        const c = document.getElementById('canvas').getBoundingClientRect();
+        const a = document.querySelector('aside').getBoundingClientRect();
+        return [c.left, c.top, c.width, c.height, a.left, a.width, document.querySelector('header').offsetHeight];
+    }""")
+
+
+def plan_again(page: Any, start: tuple[float, float], goal: tuple[float, float]) -> None:
+    """Click a new start and goal and plan; wait for the answer."""
+    page.select_option("#mode", "start")
+    for x, y in (start, goal):
+        px, py = page.evaluate("([x, y]) => window.viewer.worldToPage(x, y)", [x, y])
+        page.mouse.click(px, py)
+    page.click("#plan")
+    page.wait_for_function("!window.viewer.busy && (window.viewer.plan !== null || window.viewer.error !== null)",
+                           timeout=120_000)
 
 
 @pytest.mark.skipif(CHROMIUM is None, reason="Debian's chromium is not installed (apt-get install chromium; "
@@ -110,6 +131,23 @@ def test_viewer_plans_in_headless_chromium(server: Server, tmp_path: Path) -> No
             assert rec["status"] == "exact"
             assert page.inner_text("#r-length") == f"{rec['length_m']:.2f} m"
             assert math.dist((rec["final"]["x"], rec["final"]["y"]), (3.5, 3.0)) < 0.15
+
+            # a failed plan (the goal inside the wall): every old number goes, the panel says "failed" and why,
+            # and nothing on the page moves
+            plan_again(page, (2.0, 2.0), (4.0, 3.5))
+            assert page.evaluate("window.viewer.error") is None and page.inner_text("#n-length") != "–"
+            page.click("#simulate")
+            page.wait_for_function("window.viewer.sim !== null || window.viewer.error !== null", timeout=240_000)
+            before = layout(page)
+            plan_again(page, (2.0, 2.0), (5.1, 2.0))
+            assert page.evaluate("window.viewer.error") is not None
+            assert page.inner_text("#n-status") == "failed" and "goal" in page.inner_text("#n-why")
+            for cell in ("n-length", "n-duration", "n-time", "n-expansions", "n-clearance", "n-roll", "s-status",
+                         "s-rms", "s-max", "s-final", "s-est", "r-mode", "r-length", "r-pos", "r-p"):
+                assert page.inner_text(f"#{cell}") == "–", cell
+            assert page.evaluate("[window.viewer.plan, window.viewer.sim, window.viewer.rec]") == [None, None, None]
+            assert "failed" in page.inner_text("#status")
+            assert layout(page) == before
         finally:
             browser.close()
     assert not errors, errors
