@@ -24,6 +24,7 @@ from rosbags.typesys import Stores, get_typestore
 
 from planner.maps.catalogue import default_maps_dir
 from planner.maps.nav2 import load_map, snap_resolution
+from planner.termination import Termination
 from service.cli import build_parser, main
 from tests.service import service_harness as harness
 from tests.service.service_harness import Server
@@ -203,7 +204,8 @@ def test_the_core_install_leaves_the_heavy_parts_to_extras() -> None:
     extras = project["optional-dependencies"]
     assert any("mujoco" in d for d in extras["physics"]) and any("casadi" in d for d in extras["control"])
     assert any("fcl" in d for d in extras["mesh"])
-    assert "sphereplan[physics,control,mesh]" in extras["dev"]
+    assert any("opencv" in d for d in extras["vision"]) and "opencv" not in core
+    assert "sphereplan[physics,control,mesh,vision]" in extras["dev"]
     assert "'.[dev]'" in (REPO / ".ci" / "run").read_text()
 
 
@@ -423,9 +425,10 @@ def test_a_schedule_that_falls_short_is_a_failure_at_every_door(monkeypatch: pyt
     from service.jobs import vpip_schedule_job
 
     short = {"summary": {"reached_end": False, "duration_s": 3.0}, "t": [0.0]}
-    monkeypatch.setattr(api, "schedule_report", lambda plan, robot, driver: short)
-    outcome = vpip_schedule_job({}, "daedalus", "vpip")
+    monkeypatch.setattr(api, "schedule_report", lambda plan, robot, driver, termination=None: short)
+    outcome = vpip_schedule_job({}, "daedalus", "vpip", Termination())
     assert outcome.answer.http_status == 422 and outcome.answer.zenoh_reply == "reply_err"
     assert outcome.answer.exit_code == 3 and outcome.json() == short
-    monkeypatch.setattr(api, "schedule_report", lambda plan, robot, driver: {**short, "summary": {"reached_end": True}})
-    assert vpip_schedule_job({}, "daedalus", "vpip").ok
+    monkeypatch.setattr(api, "schedule_report",
+                        lambda plan, robot, driver, termination=None: {**short, "summary": {"reached_end": True}})
+    assert vpip_schedule_job({}, "daedalus", "vpip", Termination()).ok

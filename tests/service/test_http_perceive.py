@@ -42,7 +42,7 @@ def body(files: dict[str, Path], **changes: Any) -> dict[str, Any]:
            "right_image": base64.b64encode(files["right_png"].read_bytes()).decode(),
            "left_info": yaml.safe_load(files["left_yaml"].read_text()),
            "right_info": yaml.safe_load(files["right_yaml"].read_text()),
-           "pose": {"x": 1.0, "y": -2.0, "yaw": 20.0}, "roll": 3.0, "degrees": True}
+           "pose": {"x": 1.0, "y": -2.0, "yaw_deg": 20.0}, "roll": 3.0, "degrees": True}
     out.update(changes)
     return out
 
