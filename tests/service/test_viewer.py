@@ -1,6 +1,7 @@
 """The viewer at ``GET /`` in a real headless Chromium (Debian's ``chromium``, driven by Playwright): load the
 page from a running ``sphereplan serve``, click and drag the start and goal, plan, and check that a path
-is drawn and the numbers shown are the API's; refreshes the screenshot docs/img/viewer.png when SPHEREPLAN_UPDATE_DOCS=1."""
+is drawn and the numbers shown are the API's; refreshes the screenshot docs/img/viewer.png when
+SPHEREPLAN_UPDATE_DOCS=1."""
 
 from __future__ import annotations
 
