@@ -1,0 +1,95 @@
+"""Refresh a planner for a changed part of its map instead of rebuilding it.
+
+A :class:`~planner.hybrid_astar.search.HybridAStar` precomputes, per map, the blocked cells, the clearance
+(a Euclidean distance transform, :class:`planner.maps.clearance.ClearanceMap`) and the coarse cost multipliers
+of its holonomic heuristic. When a live-map update changed only the cells in a rectangle R, only clearances
+within ``reach`` of R can change *below* ``reach``: a cell farther than ``reach`` from R keeps every obstacle
+within ``reach`` of it. So the distance transform is recomputed on R grown by 2·reach (every obstacle within
+``reach`` of a cell of R + reach lies in it) and written back on R + reach; values there are exact up to
+``reach`` and above it elsewhere. ``reach`` is chosen above every clearance the search compares against
+(the covering circles' radius plus the proximity range and preferred clearance, and the reported
+clearance's cap), so a refreshed planner plans exactly as a rebuilt one. The coarse multipliers are rebuilt
+on the coarse cells over R + reach, and the cached heuristic tables are dropped (the goal's wavefront is
+recomputed on the next plan, cut off at twice the start's cost as usual).
+
+The interface to the planner is narrow on purpose: the grid (a view the live map updates in place), the
+changed rectangle, and the planner's public ``clearance``, ``holonomic_mult`` and heuristic cache.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+
+import numpy as np
+from scipy.ndimage import distance_transform_edt
+
+from planner.hybrid_astar.heuristics import coarse_cost_grid
+from planner.hybrid_astar.search import CLEARANCE_REACH_M, HybridAStar
+from planner.live.live_map import CellRect
+
+PATCH_SHARE_LIMIT = 0.35
+"""When the window to recompute covers more than this share of the map, rebuild the planner instead."""
+
+
+def exact_reach_m(planner: HybridAStar) -> float:
+    """The clearance (m) up to which a refreshed planner's clearance must be exact (see the module docstring)."""
+    o = planner.options
+    res = planner.grid.resolution_m
+    r_c = planner.footprint.radius_m
+    needed = max(CLEARANCE_REACH_M + r_c,
+                 r_c + max(o.proximity_range_m, planner.robot.preferred_clearance_m) + planner.robot.preferred_clearance_m,
+                 planner.centre_threshold_m)
+    return needed + 2.0 * math.sqrt(2.0) * res
+
+
+def refresh(planner: HybridAStar, changed: CellRect) -> tuple[HybridAStar, float, str]:
+    """Bring ``planner`` up to date with its grid after the cells in ``changed`` changed.
+
+    Returns (the planner to use, seconds it took, how: ``"patched"`` or ``"rebuilt"``). The planner is
+    patched in place when the window is small against the map, else a new one is built on the same grid.
+    """
+    t0 = time.perf_counter()
+    grid = planner.grid
+    h, w = grid.data.shape
+    res = grid.resolution_m
+    reach = exact_reach_m(planner)
+    n_reach = int(math.ceil(reach / res)) + 1
+    outer = changed.expanded(2 * n_reach, w, h)
+    if outer.cells > PATCH_SHARE_LIMIT * w * h:
+        return HybridAStar(grid, planner.robot, planner.options), time.perf_counter() - t0, "rebuilt"
+    cm = planner.clearance
+    allow_unknown = planner.options.allow_unknown
+    sl = outer.slices()
+    blocked_outer = grid.data[sl] >= grid.occupied_threshold
+    if not allow_unknown:
+        blocked_outer |= grid.data[sl] < 0
+    cm.blocked[sl] = blocked_outer
+    # the ring outside the map counts as blocked (ClearanceMap's convention); other window edges do not
+    pad = ((1 if outer.iy0 == 0 else 0, 1 if outer.iy1 == h else 0),
+           (1 if outer.ix0 == 0 else 0, 1 if outer.ix1 == w else 0))
+    padded = np.pad(blocked_outer, pad, constant_values=True)
+    edt = distance_transform_edt(~padded) if padded.any() else np.full(padded.shape, np.inf)
+    edt = edt[pad[0][0]:edt.shape[0] - pad[0][1], pad[1][0]:edt.shape[1] - pad[1][1]]
+    inner = changed.expanded(n_reach, w, h)
+    iy0, ix0 = inner.iy0 - outer.iy0, inner.ix0 - outer.ix0
+    window = edt[iy0:iy0 + inner.iy1 - inner.iy0, ix0:ix0 + inner.ix1 - inner.ix0]
+    # beyond the window's own obstacles the transform may say inf: any value ≥ reach plans the same
+    window = np.minimum(window * res, reach + max(w, h) * res)
+    cm.clearance[inner.slices()] = window - math.sqrt(2.0) * res
+    _refresh_coarse(planner, inner)
+    planner._heuristics.clear()
+    return planner, time.perf_counter() - t0, "patched"
+
+
+def _refresh_coarse(planner: HybridAStar, inner: CellRect) -> None:
+    """Recompute the heuristic's coarse multipliers on the coarse cells covering ``inner``."""
+    f = planner.heuristic_factor
+    o = planner.options
+    h, w = planner.clearance.clearance.shape
+    cy0, cx0 = inner.iy0 // f, inner.ix0 // f
+    cy1, cx1 = -(-inner.iy1 // f), -(-inner.ix1 // f)
+    fine = planner.clearance.clearance[cy0 * f:min(h, cy1 * f), cx0 * f:min(w, cx1 * f)]
+    planner.holonomic_mult[cy0:cy1, cx0:cx1] = coarse_cost_grid(
+        fine, planner.centre_threshold_m, planner.footprint.radius_m,
+        max(o.proximity_range_m, planner.robot.preferred_clearance_m), o.cost_penalty, f)
