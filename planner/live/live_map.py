@@ -19,6 +19,7 @@ from dataclasses import dataclass
 
 import numpy as np
 from numba import njit
+from scipy.ndimage import find_objects, label
 
 from planner.errors import InvalidInput
 from planner.live.obstacle_layer import ObstacleLayerParams
@@ -27,6 +28,8 @@ from planner.occupancy import FREE, OCCUPIED, UNKNOWN, OccupancyGrid
 
 MAX_LIVE_CELLS = 16_000_000
 """A live map may hold at most this many cells (the 100 m × 100 m field at 5 cm is 4 M)."""
+REGION_TILE_CELLS = 32
+"""Changed cells are grouped into clusters of touching tiles of this many cells a side (see ``MapUpdate.regions``)."""
 
 
 @dataclass(frozen=True)
@@ -64,17 +67,21 @@ class CellRect:
 @dataclass(frozen=True)
 class MapUpdate:
     """What one update did: ``changed`` is the smallest rectangle holding every cell whose planner-visible
-    value changed (None when none did), ``cells_changed`` how many did; ``marked`` points marked,
-    ``rays`` rays traced, ``time_s`` the update's wall time."""
+    value changed (None when none did), ``regions`` the bounding rectangles of the clusters of changed cells
+    (touching :data:`REGION_TILE_CELLS`-tiles: a sweep's scattered changes are a few small rectangles, not one
+    big one), ``cells_changed`` how many cells changed; ``marked`` points marked, ``rays`` rays traced,
+    ``time_s`` the update's wall time."""
 
     changed: CellRect | None
     cells_changed: int
     marked: int
     rays: int
     time_s: float
+    regions: tuple[CellRect, ...] = ()
 
     def to_json(self) -> dict[str, object]:
         return {"changed": None if self.changed is None else self.changed.to_json(),
+                "regions": [r.to_json() for r in self.regions],
                 "cells_changed": self.cells_changed, "marked": self.marked, "rays": self.rays,
                 "time_s": self.time_s}
 
@@ -275,4 +282,26 @@ class LiveMap:
         old[...] = new
         tight = CellRect(rect.ix0 + int(ix[0]), rect.iy0 + int(iy[0]), rect.ix0 + int(ix[-1]) + 1,
                          rect.iy0 + int(iy[-1]) + 1)
-        return MapUpdate(tight, int(diff.sum()), marked, rays, time.perf_counter() - t0)
+        return MapUpdate(tight, int(diff.sum()), marked, rays, time.perf_counter() - t0, _clusters(diff, rect))
+
+
+def _clusters(diff: np.ndarray, at: CellRect) -> tuple[CellRect, ...]:
+    """Bounding rectangles (map cells) of the 8-connected clusters of changed tiles in ``diff`` (placed at ``at``)."""
+    t = REGION_TILE_CELLS
+    h, w = diff.shape
+    th, tw = -(-h // t), -(-w // t)
+    pad = np.zeros((th * t, tw * t), dtype=bool)
+    pad[:h, :w] = diff
+    tiles = pad.reshape(th, t, tw, t).any(axis=(1, 3))
+    labels, _ = label(tiles, structure=np.ones((3, 3), dtype=bool))
+    out = []
+    for sl in find_objects(labels):
+        if sl is None:
+            continue
+        y0, y1 = sl[0].start * t, min(h, sl[0].stop * t)
+        x0, x1 = sl[1].start * t, min(w, sl[1].stop * t)
+        block = diff[y0:y1, x0:x1]
+        ry, rx = np.flatnonzero(block.any(axis=1)), np.flatnonzero(block.any(axis=0))
+        out.append(CellRect(at.ix0 + x0 + int(rx[0]), at.iy0 + y0 + int(ry[0]),
+                            at.ix0 + x0 + int(rx[-1]) + 1, at.iy0 + y0 + int(ry[-1]) + 1))
+    return tuple(out)

@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import math
 import time
+from collections.abc import Sequence
 
 import numpy as np
 from scipy.ndimage import distance_transform_edt
@@ -43,43 +44,74 @@ def exact_reach_m(planner: HybridAStar) -> float:
     return needed + 2.0 * math.sqrt(2.0) * res
 
 
-def refresh(planner: HybridAStar, changed: CellRect) -> tuple[HybridAStar, float, str]:
-    """Bring ``planner`` up to date with its grid after the cells in ``changed`` changed.
+def refresh(planner: HybridAStar, changed: Sequence[CellRect]) -> tuple[HybridAStar, float, str]:
+    """Bring ``planner`` up to date with its grid after the cells in the rectangles ``changed`` changed.
 
-    Returns (the planner to use, seconds it took, how: ``"patched"`` or ``"rebuilt"``). The planner is
-    patched in place when the window is small against the map, else a new one is built on the same grid.
+    Returns (the planner to use, seconds it took, how: ``"patched"`` or ``"rebuilt"``). Rectangles whose
+    windows overlap are patched together with one distance transform over their windows' bounding box; when
+    those boxes together cover more than :data:`PATCH_SHARE_LIMIT` of the map a new planner is built instead.
     """
     t0 = time.perf_counter()
     grid = planner.grid
     h, w = grid.data.shape
+    n_reach = int(math.ceil(exact_reach_m(planner) / grid.resolution_m)) + 1
+    groups = _groups([rect for rect in changed if rect.cells > 0], n_reach, w, h)
+    if sum(box.cells for box, _ in groups) > PATCH_SHARE_LIMIT * w * h:
+        return HybridAStar(grid, planner.robot, planner.options), time.perf_counter() - t0, "rebuilt"
+    for box, members in groups:
+        _patch(planner, box, members, n_reach)
+    planner._heuristics.clear()
+    return planner, time.perf_counter() - t0, "patched"
+
+
+def _groups(rects: list[CellRect], n_reach: int, w: int, h: int) -> list[tuple[CellRect, list[CellRect]]]:
+    """Rectangles whose 2·reach windows overlap, merged: (the windows' bounding box, the rectangles)."""
+    groups: list[tuple[CellRect, list[CellRect]]] = [(r.expanded(2 * n_reach, w, h), [r]) for r in rects]
+    merged = True
+    while merged:
+        merged = False
+        for i in range(len(groups)):
+            for j in range(i + 1, len(groups)):
+                a, b = groups[i][0], groups[j][0]
+                if a.ix0 < b.ix1 and b.ix0 < a.ix1 and a.iy0 < b.iy1 and b.iy0 < a.iy1:
+                    groups[i] = (a.union(b), groups[i][1] + groups[j][1])
+                    del groups[j]
+                    merged = True
+                    break
+            if merged:
+                break
+    return groups
+
+
+def _patch(planner: HybridAStar, outer: CellRect, members: list[CellRect], n_reach: int) -> None:
+    """One distance transform over ``outer``; blocked cells, clearance and coarse multipliers rewritten around
+    each changed rectangle of ``members`` (all of whose 2·reach windows lie in ``outer``)."""
+    grid = planner.grid
+    h, w = grid.data.shape
     res = grid.resolution_m
     reach = exact_reach_m(planner)
-    n_reach = int(math.ceil(reach / res)) + 1
-    outer = changed.expanded(2 * n_reach, w, h)
-    if outer.cells > PATCH_SHARE_LIMIT * w * h:
-        return HybridAStar(grid, planner.robot, planner.options), time.perf_counter() - t0, "rebuilt"
     cm = planner.clearance
     allow_unknown = planner.options.allow_unknown
     sl = outer.slices()
     blocked_outer = grid.data[sl] >= grid.occupied_threshold
     if not allow_unknown:
         blocked_outer |= grid.data[sl] < 0
-    cm.blocked[sl] = blocked_outer
+    for rect in members:
+        cm.blocked[rect.slices()] = blocked_outer[rect.iy0 - outer.iy0:rect.iy1 - outer.iy0,
+                                                  rect.ix0 - outer.ix0:rect.ix1 - outer.ix0]
     # the ring outside the map counts as blocked (ClearanceMap's convention); other window edges do not
     pad = ((1 if outer.iy0 == 0 else 0, 1 if outer.iy1 == h else 0),
            (1 if outer.ix0 == 0 else 0, 1 if outer.ix1 == w else 0))
     padded = np.pad(blocked_outer, pad, constant_values=True)
     edt = distance_transform_edt(~padded) if padded.any() else np.full(padded.shape, np.inf)
     edt = edt[pad[0][0]:edt.shape[0] - pad[0][1], pad[1][0]:edt.shape[1] - pad[1][1]]
-    inner = changed.expanded(n_reach, w, h)
-    iy0, ix0 = inner.iy0 - outer.iy0, inner.ix0 - outer.ix0
-    window = edt[iy0:iy0 + inner.iy1 - inner.iy0, ix0:ix0 + inner.ix1 - inner.ix0]
     # beyond the window's own obstacles the transform may say inf: any value ≥ reach plans the same
-    window = np.minimum(window * res, reach + max(w, h) * res)
-    cm.clearance[inner.slices()] = window - math.sqrt(2.0) * res
-    _refresh_coarse(planner, inner)
-    planner._heuristics.clear()
-    return planner, time.perf_counter() - t0, "patched"
+    edt = np.minimum(edt * res, reach + max(w, h) * res) - math.sqrt(2.0) * res
+    for rect in members:
+        inner = rect.expanded(n_reach, w, h)
+        cm.clearance[inner.slices()] = edt[inner.iy0 - outer.iy0:inner.iy1 - outer.iy0,
+                                           inner.ix0 - outer.ix0:inner.ix1 - outer.ix0]
+        _refresh_coarse(planner, inner)
 
 
 def _refresh_coarse(planner: HybridAStar, inner: CellRect) -> None:

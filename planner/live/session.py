@@ -34,6 +34,9 @@ from planner.termination import Termination
 EVENTS_KEPT = 256
 """Replan events a session remembers (older ones are dropped)."""
 
+MAX_PENDING_REGIONS = 256
+"""Changed rectangles a session collects before refreshing; beyond that they are merged into one."""
+
 REASONS = ("goal", "blocked", "timer", "map_changed", "request")
 """Why a session replans: a new goal, the path ahead is blocked, the replan timer, a failed plan retried
 after the map changed, or a caller asked."""
@@ -43,11 +46,14 @@ after the map changed, or a caller asked."""
 class ReplanPolicy:
     """When to replan. ``period_s``: also replan this often while a goal is active (None = only when needed,
     as Nav2's planner server with ``expected_planner_frequency`` 0); ``time_limit_s``: each plan's limit;
-    ``arrival_tolerance_m``: the goal counts as reached (no more replans) this close."""
+    ``arrival_tolerance_m``: the goal counts as reached (no more replans) this close; ``retry_period_s``: after a
+    failed plan, a map change triggers a new attempt at most this often (a stopped robot's flickering sensor
+    noise must not replan at the sensor's rate)."""
 
     period_s: float | None = None
     time_limit_s: float = 2.0
     arrival_tolerance_m: float = 0.25
+    retry_period_s: float = 1.0
 
     def __post_init__(self) -> None:
         if self.period_s is not None and not (math.isfinite(self.period_s) and self.period_s > 0):
@@ -56,6 +62,8 @@ class ReplanPolicy:
             raise InvalidInput("time_limit_s", f"must be in (0, 60] s, got {self.time_limit_s!r}")
         if not (math.isfinite(self.arrival_tolerance_m) and self.arrival_tolerance_m > 0):
             raise InvalidInput("arrival_tolerance_m", "must be a finite number > 0")
+        if not (math.isfinite(self.retry_period_s) and self.retry_period_s >= 0):
+            raise InvalidInput("retry_period_s", "must be a finite number of seconds ≥ 0")
 
 
 @dataclass(frozen=True)
@@ -134,7 +142,7 @@ class LiveSession:
         self.listeners: list[Callable[[ReplanEvent], None]] = []
         self.arrived = False
         self._planner: HybridAStar | None = None
-        self._pending: CellRect | None = None
+        self._pending: list[CellRect] = []
         self._progress = _Progress()
         self._seq = 0
         self._last_plan_t = -math.inf
@@ -150,6 +158,7 @@ class LiveSession:
         if self.goal is not None and not self.arrived and self.policy.period_s is not None:
             now = self.clock() if now_s is None else now_s
             if now - self._last_plan_t >= self.policy.period_s:
+                self._sync_s, self._sync_mode = 0.0, ""
                 return self.replan("timer", time.perf_counter())
         return None
 
@@ -159,19 +168,28 @@ class LiveSession:
             raise InvalidInput("pose", "the session has no pose yet: send the robot's pose before its goal")
         self.goal = _pose(goal, "goal")
         self.arrived = False
+        self._sync_s, self._sync_mode = 0.0, ""
         return self.replan("goal", time.perf_counter())
 
     def observe(self, observation: Observation) -> tuple[MapUpdate, ReplanEvent | None]:
         """Apply an observation to the live map; replan when it blocks the rest of the path (or when the last
         plan failed and the map changed). Returns the map update and the replan, if one happened."""
         t0 = time.perf_counter()
+        self._sync_s, self._sync_mode = 0.0, ""
         update = self.map.apply(observation)
         if update.changed is None:
             return update, None
-        self._pending = update.changed.union(self._pending)
+        self._pending.extend(update.regions)
+        if len(self._pending) > MAX_PENDING_REGIONS:
+            union = self._pending[0]
+            for rect in self._pending[1:]:
+                union = union.union(rect)
+            self._pending = [union]
         if self.goal is None or self.pose is None or self.arrived:
             return update, None
         if self.path is None:
+            if self.clock() - self._last_plan_t < self.policy.retry_period_s:
+                return update, None
             return update, self.replan("map_changed", t0)
         blocked = self.blocked_index()
         if blocked is None:
@@ -193,14 +211,14 @@ class LiveSession:
         if self._planner is None:
             t0 = time.perf_counter()
             self._planner = HybridAStar(self.map.grid, self.robot, self.options)
-            self._pending = None
+            self._pending = []
             self._sync_s += time.perf_counter() - t0
             self._sync_mode = "built"
             return
-        if self._pending is None:
+        if not self._pending:
             return
         self._planner, took, how = refresh(self._planner, self._pending)
-        self._pending = None
+        self._pending = []
         self._sync_s += took
         self._sync_mode = how
 

@@ -31,10 +31,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--rrt-time", type=finite_float, default=2.0, help="RRT* budget, s (0 = skip)")
     parser.add_argument("--csv", default=None, help="CSV output (default bench.csv; bench_real.csv for --suite real)")
     parser.add_argument("--png", default=None, help="PNG output (default bench.png; bench_real.png for --suite real)")
-    parser.add_argument("--suite", choices=("planning", "reconfigure", "mpc", "all", "real"), default="planning",
+    parser.add_argument("--suite", choices=("planning", "reconfigure", "mpc", "all", "real", "explore"),
+                        default="planning",
                         help="planning: Hybrid A* vs OMPL on the shipped problems (default); reconfigure: Spherobot "
                              "plan times; mpc: MPC step times of the tracker; all: those three; real: random "
-                             "problems on Nav2's maps against BIT* (minutes)")
+                             "problems on Nav2's maps against BIT* (minutes); explore: live-map exploration of "
+                             "seeded worlds with hidden obstacles (tens of minutes; --problems filters by world "
+                             "name)")
     real = parser.add_argument_group("--suite real")
     real.add_argument("--real-maps", default=None,
                       help="comma-separated map names in maps/real or YAML paths (default: every map in maps/real)")
@@ -108,6 +111,11 @@ def run_real(args: argparse.Namespace) -> int:
 def run(args: argparse.Namespace) -> int:
     if args.suite == "real":
         return run_real(args)
+    if args.suite == "explore":
+        from lab.explore_bench import main as explore_main
+
+        explore_main(args.robot, only=args.problems, quiet=quiet())
+        return 0
     if args.runs < 1:
         raise InvalidInput("--runs", "must be ≥ 1")
     if args.suite in ("reconfigure", "all"):
