@@ -395,6 +395,10 @@ def create_app(settings: ServiceSettings | None = None, service: PlanningService
         redirect_slashes=False,  # /v1/plan/ is an unknown route (404), not a redirect built from the Host header
     )
     app.state.service = svc
+    from service.http_sessions import router as sessions
+    from service.sessions import SessionStore
+
+    app.state.sessions = SessionStore()
     app.include_router(health)
     app.include_router(plan)
     app.include_router(simulate)
@@ -404,6 +408,7 @@ def create_app(settings: ServiceSettings | None = None, service: PlanningService
     app.include_router(maps)
     app.include_router(robots)
     app.include_router(viewer)
+    app.include_router(sessions)
     install_error_handlers(app)
     app.add_middleware(BodyLimit, limit=settings.max_body_bytes)
     if settings.http_token is not None:
