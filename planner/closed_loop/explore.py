@@ -161,6 +161,8 @@ def explore(known: OccupancyGrid, world: OccupancyGrid, robot: RobotProfile, sta
         if event is None:
             return
         events.append((t_sim, event))
+        if snapshots[-1][0] == t_sim:
+            snapshots.pop()
         snapshots.append((t_sim, live.data.copy()))
         ref = _reference(session)
         seg_i, s_proj = 0, 0.0
@@ -172,8 +174,9 @@ def explore(known: OccupancyGrid, world: OccupancyGrid, robot: RobotProfile, sta
                 mpc = MPCTracker(robot, obstacles=ObstacleCircles(live.snapshot()))
 
     def sweep() -> None:
-        scan = opts.sensor.scan(world, (state.x, state.y, state.yaw), rng)
-        session.set_pose((state.x, state.y, state.yaw), t_sim)
+        pose = (state.x, state.y, wrap(state.yaw))
+        scan = opts.sensor.scan(world, pose, rng)
+        session.set_pose(pose, t_sim)
         update, event = session.observe(scan)
         update_s.append(update.time_s)
         adopt(event)
@@ -195,7 +198,7 @@ def explore(known: OccupancyGrid, world: OccupancyGrid, robot: RobotProfile, sta
             break
         if k > 0 and k % sweep_every == 0:
             sweep()
-            adopt(session.set_pose((state.x, state.y, state.yaw), t_sim))
+            adopt(session.set_pose((state.x, state.y, wrap(state.yaw)), t_sim))
             stalled = stalled + 1 if ref is None and abs(state.v) < 1e-3 else 0
             if stalled >= opts.max_stalled_sweeps:
                 outcome = "no_path"
