@@ -112,8 +112,8 @@ def _trace(observed: np.ndarray, ox: float, oy: float, res: float, sx: float, sy
         stepy = 1 if gy1 > gy0 else -1
         tdx = abs(1.0 / (gx1 - gx0)) if gx1 != gx0 else math.inf
         tdy = abs(1.0 / (gy1 - gy0)) if gy1 != gy0 else math.inf
-        tmx = ((ix + 1 - gx0) if stepx > 0 else (gx0 - ix)) * tdx
-        tmy = ((iy + 1 - gy0) if stepy > 0 else (gy0 - iy)) * tdy
+        tmx = ((ix + 1 - gx0) if stepx > 0 else (gx0 - ix)) * tdx if gx1 != gx0 else math.inf
+        tmy = ((iy + 1 - gy0) if stepy > 0 else (gy0 - iy)) * tdy if gy1 != gy0 else math.inf
         n = abs(ixe - ix) + abs(iye - iy)
         last = n if not keep_end[i] or f < 1.0 else n - 1
         for k in range(n + 1):

@@ -39,8 +39,8 @@ def _cast(blocked: np.ndarray, ox: float, oy: float, res: float, sx: float, sy: 
         stepy = 1 if dy > 0 else -1
         tdx = abs(res / dx) if dx != 0.0 else math.inf
         tdy = abs(res / dy) if dy != 0.0 else math.inf
-        tmx = ((ix + 1 - gx0) if stepx > 0 else (gx0 - ix)) * tdx
-        tmy = ((iy + 1 - gy0) if stepy > 0 else (gy0 - iy)) * tdy
+        tmx = ((ix + 1 - gx0) if stepx > 0 else (gx0 - ix)) * tdx if dx != 0.0 else math.inf
+        tmy = ((iy + 1 - gy0) if stepy > 0 else (gy0 - iy)) * tdy if dy != 0.0 else math.inf
         t = 0.0
         while t <= range_m:
             if ix < 0 or iy < 0 or ix >= w or iy >= h:

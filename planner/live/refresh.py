@@ -2,24 +2,27 @@
 
 A :class:`~planner.hybrid_astar.search.HybridAStar` precomputes, per map, the blocked cells, the clearance
 (a Euclidean distance transform, :class:`planner.maps.clearance.ClearanceMap`) and the coarse cost multipliers
-of its holonomic heuristic. When a live-map update changed only the cells in a rectangle R, only clearances
-within ``reach`` of R can change *below* ``reach``: a cell farther than ``reach`` from R keeps every obstacle
-within ``reach`` of it. So the distance transform is recomputed on R grown by 2·reach (every obstacle within
-``reach`` of a cell of R + reach lies in it) and written back on R + reach; values there are exact up to
-``reach`` and above it elsewhere. ``reach`` is chosen above every clearance the search compares against
-(the covering circles' radius plus the proximity range and preferred clearance, and the reported
-clearance's cap), so a refreshed planner plans exactly as a rebuilt one. The coarse multipliers are rebuilt
-on the coarse cells over R + reach, and the cached heuristic tables are dropped (the goal's wavefront is
-recomputed on the next plan, cut off at twice the start's cost as usual).
+of its holonomic heuristic. The search also *skips ahead* by the clearance when it checks a motion, so a
+stored clearance may be smaller than the truth, never larger.
+
+A live planner's clearance is therefore capped at ``C`` (:func:`cap_m`, a little above every clearance the
+search compares against: the covering circles' radius plus the proximity range and preferred clearance, and
+the reported clearance's cap), after which a change in a rectangle R can only alter cells within ``C`` of R.
+Those (R grown by ``C``) are recomputed from a distance transform over R grown by 2·``C`` (every obstacle within
+``C`` of them lies inside it) and capped again. The result is min(true clearance, ``C``) everywhere, exactly
+what a rebuilt planner holds after the same cap, so a refreshed planner plans as a rebuilt one. The coarse
+multipliers are rebuilt on the coarse cells over the recomputed cells and the cached heuristic tables are
+dropped (the goal's wavefront is recomputed on the next plan, cut off at twice the start's cost as usual).
 
 The interface to the planner is narrow on purpose: the grid (a view the live map updates in place), the
-changed rectangle, and the planner's public ``clearance``, ``holonomic_mult`` and heuristic cache.
+changed rectangles, and the planner's public ``clearance``, ``holonomic_mult`` and heuristic cache.
 """
 
 from __future__ import annotations
 
 import math
 import time
+import weakref
 from collections.abc import Sequence
 
 import numpy as np
@@ -44,20 +47,39 @@ def exact_reach_m(planner: HybridAStar) -> float:
     return needed + 2.0 * math.sqrt(2.0) * res
 
 
-def refresh(planner: HybridAStar, changed: Sequence[CellRect]) -> tuple[HybridAStar, float, str]:
+def cap_m(planner: HybridAStar) -> float:
+    """The clearance cap C (m) of a live planner: whole cells, at least :func:`exact_reach_m`."""
+    res = planner.grid.resolution_m
+    return (math.ceil(exact_reach_m(planner) / res) + 1) * res
+
+
+_capped: weakref.WeakSet[HybridAStar] = weakref.WeakSet()
+
+
+def capped(planner: HybridAStar) -> HybridAStar:
+    """Cap ``planner``'s clearance at :func:`cap_m` in place (once per planner); returns it."""
+    if planner not in _capped:
+        np.minimum(planner.clearance.clearance, cap_m(planner), out=planner.clearance.clearance)
+        _capped.add(planner)
+    return planner
+
+
+def refresh(planner: HybridAStar, changed: Sequence[CellRect],
+            max_share: float = PATCH_SHARE_LIMIT) -> tuple[HybridAStar, float, str]:
     """Bring ``planner`` up to date with its grid after the cells in the rectangles ``changed`` changed.
 
     Returns (the planner to use, seconds it took, how: ``"patched"`` or ``"rebuilt"``). Rectangles whose
     windows overlap are patched together with one distance transform over their windows' bounding box; when
-    those boxes together cover more than :data:`PATCH_SHARE_LIMIT` of the map a new planner is built instead.
+    those boxes together cover more than ``max_share`` of the map a new planner is built instead.
     """
     t0 = time.perf_counter()
     grid = planner.grid
     h, w = grid.data.shape
-    n_reach = int(math.ceil(exact_reach_m(planner) / grid.resolution_m)) + 1
+    capped(planner)
+    n_reach = int(round(cap_m(planner) / grid.resolution_m)) + 2
     groups = _groups([rect for rect in changed if rect.cells > 0], n_reach, w, h)
-    if sum(box.cells for box, _ in groups) > PATCH_SHARE_LIMIT * w * h:
-        return HybridAStar(grid, planner.robot, planner.options), time.perf_counter() - t0, "rebuilt"
+    if sum(box.cells for box, _ in groups) > max_share * w * h:
+        return capped(HybridAStar(grid, planner.robot, planner.options)), time.perf_counter() - t0, "rebuilt"
     for box, members in groups:
         _patch(planner, box, members, n_reach)
     planner._heuristics.clear()
@@ -89,7 +111,7 @@ def _patch(planner: HybridAStar, outer: CellRect, members: list[CellRect], n_rea
     grid = planner.grid
     h, w = grid.data.shape
     res = grid.resolution_m
-    reach = exact_reach_m(planner)
+    cap = cap_m(planner)
     cm = planner.clearance
     allow_unknown = planner.options.allow_unknown
     sl = outer.slices()
@@ -105,8 +127,8 @@ def _patch(planner: HybridAStar, outer: CellRect, members: list[CellRect], n_rea
     padded = np.pad(blocked_outer, pad, constant_values=True)
     edt = distance_transform_edt(~padded) if padded.any() else np.full(padded.shape, np.inf)
     edt = edt[pad[0][0]:edt.shape[0] - pad[0][1], pad[1][0]:edt.shape[1] - pad[1][1]]
-    # beyond the window's own obstacles the transform may say inf: any value ≥ reach plans the same
-    edt = np.minimum(edt * res, reach + max(w, h) * res) - math.sqrt(2.0) * res
+    # exact wherever ≤ the cap: an obstacle outside the window is farther than the cap from every written cell
+    edt = np.minimum(edt * res - math.sqrt(2.0) * res, cap)
     for rect in members:
         inner = rect.expanded(n_reach, w, h)
         cm.clearance[inner.slices()] = edt[inner.iy0 - outer.iy0:inner.iy1 - outer.iy0,

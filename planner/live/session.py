@@ -26,7 +26,7 @@ from planner.hybrid_astar.search import HybridAStar, PlannerOptions, Pose
 from planner.kinematics import wrap
 from planner.live.live_map import CellRect, LiveMap, MapUpdate
 from planner.live.observations import Observation
-from planner.live.refresh import refresh
+from planner.live.refresh import capped, refresh
 from planner.result import PlanResult
 from planner.robot import RobotProfile
 from planner.termination import Termination
@@ -210,7 +210,7 @@ class LiveSession:
         """Build the planner, or refresh it for the cells changed since; the time is reported by the next replan."""
         if self._planner is None:
             t0 = time.perf_counter()
-            self._planner = HybridAStar(self.map.grid, self.robot, self.options)
+            self._planner = capped(HybridAStar(self.map.grid, self.robot, self.options))
             self._pending = []
             self._sync_s += time.perf_counter() - t0
             self._sync_mode = "built"
