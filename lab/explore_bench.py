@@ -77,6 +77,10 @@ def _ms(v: float | None) -> str:
     return "—" if v is None else f"{1e3 * v:.0f}"
 
 
+def _ms1(v: float | None) -> str:
+    return "—" if v is None else f"{1e3 * v:.1f}"
+
+
 def _pct(values: list[float], q: float) -> float | None:
     return float(np.percentile(values, q)) if values else None
 
@@ -117,8 +121,8 @@ def format_table(rows: list[SweepRow], sweep_s: dict[str, list[float]]) -> str:
     pooled("(100 m field)", lambda r: "100by100" in r.spec.map)
     pooled("(garage)", lambda r: "garage" in r.spec.map)
     for name, times in sweep_s.items():
-        lines.append(f"live-map update, one 10 m sweep (720 beams) on {name}: p50 {1e3 * _pct(times, 50):.1f} ms, "
-                     f"p95 {1e3 * _pct(times, 95):.1f} ms ({len(times)} sweeps)")
+        lines.append(f"live-map update, one 10 m sweep (720 beams) on {name}: p50 {_ms1(_pct(times, 50))} ms, "
+                     f"p95 {_ms1(_pct(times, 95))} ms ({len(times)} sweeps)")
     return "\n".join(lines)
 
 

@@ -55,7 +55,8 @@ class World:
     hidden_cells: int
 
 
-def _segment_cells(grid: OccupancyGrid, a: np.ndarray, b: np.ndarray, half_width_m: float) -> tuple[np.ndarray, np.ndarray]:
+def _segment_cells(grid: OccupancyGrid, a: np.ndarray, b: np.ndarray,
+                   half_width_m: float) -> tuple[np.ndarray, np.ndarray]:
     """(iy, ix) of the cells whose centres lie within ``half_width_m`` of segment a–b."""
     res = grid.resolution_m
     lo = np.minimum(a, b) - half_width_m
@@ -108,7 +109,8 @@ def build_world(spec: WorldSpec, robot: RobotProfile) -> World:
                 if away(centre):
                     break
             half = rng.uniform(0.4, 0.8, 2)
-            iy, ix = _segment_cells(known, centre - [half[0], 0], centre + [half[0], 0], float(half[1]))
+            along = np.array([half[0], 0.0])
+            iy, ix = _segment_cells(known, centre - along, centre + along, float(half[1]))
             data[iy, ix] = OCCUPIED
     elif spec.kind in ("aisle", "door"):
         lo, hi = np.searchsorted(s, 0.3 * total), np.searchsorted(s, 0.7 * total)

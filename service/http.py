@@ -371,16 +371,22 @@ def create_app(settings: ServiceSettings | None = None, service: PlanningService
     @asynccontextmanager
     async def lifespan(app: FastAPI) -> AsyncIterator[None]:
         node = None
+        live = None
         await asyncio.to_thread(svc.start)
         try:
             if settings.zenoh:
+                from service.zenoh_live import start_live_doors
                 from service.zenoh_node import ZenohNode
 
                 node = ZenohNode(svc, settings)
                 await asyncio.to_thread(node.start)
+                live = await asyncio.to_thread(start_live_doors, svc, app.state.sessions, node, settings)
             log.info("sphereplan service ready (%d workers, warm-up %.1f s)", settings.workers, svc.warm_up_s)
             yield
         finally:
+            app.state.sessions.close()
+            for door in live or []:
+                await asyncio.to_thread(door.close)
             if node is not None:
                 await asyncio.to_thread(node.close)
             await asyncio.to_thread(svc.close)

@@ -68,7 +68,8 @@ def client_of(request: Request) -> str:
     return request.client.host if request.client is not None else "unknown"
 
 
-def session_grid(service: PlanningService, body: SessionCreate, robot: Any, max_cells: int) -> tuple[OccupancyGrid, str]:
+def session_grid(service: PlanningService, body: SessionCreate, robot: Any,
+                 max_cells: int) -> tuple[OccupancyGrid, str]:
     """The grid a new session starts from: a named map, an inline grid, a ROS grid, or an unknown area."""
     from service.grids import inline_grid, load_map_file
 

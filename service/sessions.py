@@ -33,8 +33,8 @@ from planner.hybrid_astar.search import PlannerOptions
 from planner.live import (
     LiveMap,
     LiveSession,
-    ObstacleLayerParams,
     Observation,
+    ObstacleLayerParams,
     PointObservation,
     RegionUpdate,
     ReplanEvent,
@@ -221,13 +221,15 @@ class SessionStore:
         data = update.to_json()
         for q in list(entry.subscribers):
             if update.changed is not None:
-                _offer(q, {"event": "map", "data": {"update": data, "known_fraction": entry.session.map.known_fraction()}})
+                known = entry.session.map.known_fraction()
+                _offer(q, {"event": "map", "data": {"update": data, "known_fraction": known}})
         return data, event
 
     def check_size(self, observation: Observation) -> None:
         lim = self.limits
         if isinstance(observation, PointObservation) and len(observation.points_m) > lim.max_points:
-            raise InvalidInput("points", f"{len(observation.points_m)} points; at most {lim.max_points} per observation")
+            raise InvalidInput("points", f"{len(observation.points_m)} points; at most {lim.max_points} per "
+                                          "observation")
         if isinstance(observation, ScanObservation) and len(observation.ranges_m) > lim.max_beams:
             raise InvalidInput("scan.ranges", f"{len(observation.ranges_m)} beams; at most {lim.max_beams} per scan")
         if isinstance(observation, RegionUpdate) and observation.data.size > lim.max_region_cells:

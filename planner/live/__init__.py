@@ -11,13 +11,25 @@ The closed-loop exploration run that uses them all is :mod:`planner.closed_loop.
 """
 
 from planner.live.live_map import CellRect, LiveMap, MapUpdate
-from planner.live.obstacle_layer import ObstacleLayerParams
 from planner.live.observations import Observation, PointObservation, RegionUpdate, ScanObservation, SensorPose
+from planner.live.obstacle_layer import ObstacleLayerParams
 from planner.live.range_sensor import RangeSensor
 from planner.live.refresh import refresh
 from planner.live.session import LiveSession, ReplanEvent, ReplanPolicy
 
 __all__ = [
-    "CellRect", "LiveMap", "LiveSession", "MapUpdate", "ObstacleLayerParams", "Observation", "PointObservation",
-    "RangeSensor", "RegionUpdate", "ReplanEvent", "ReplanPolicy", "ScanObservation", "SensorPose", "refresh",
+    "CellRect",
+    "LiveMap",
+    "LiveSession",
+    "MapUpdate",
+    "Observation",
+    "ObstacleLayerParams",
+    "PointObservation",
+    "RangeSensor",
+    "RegionUpdate",
+    "ReplanEvent",
+    "ReplanPolicy",
+    "ScanObservation",
+    "SensorPose",
+    "refresh",
 ]

@@ -22,8 +22,8 @@ from numba import njit
 from scipy.ndimage import find_objects, label
 
 from planner.errors import InvalidInput
-from planner.live.obstacle_layer import ObstacleLayerParams
 from planner.live.observations import Observation, PointObservation, RegionUpdate, ScanObservation
+from planner.live.obstacle_layer import ObstacleLayerParams
 from planner.occupancy import FREE, OCCUPIED, UNKNOWN, OccupancyGrid
 
 MAX_LIVE_CELLS = 16_000_000
@@ -158,8 +158,8 @@ class LiveMap:
             raise InvalidInput("map", f"a live map may hold at most {MAX_LIVE_CELLS} cells, this one has "
                                       f"{base.data.size}")
         self.layer = layer or ObstacleLayerParams()
-        self.static = np.array(base.data, dtype=np.int8, copy=True)
-        self.observed = np.full(self.static.shape, UNKNOWN, dtype=np.int8)
+        self.static: np.ndarray = np.array(base.data, dtype=np.int8, copy=True)
+        self.observed: np.ndarray = np.full(self.static.shape, UNKNOWN, dtype=np.int8)
         self.threshold = int(base.occupied_threshold)
         self.grid = OccupancyGrid(data=self.static.copy(), resolution_m=base.resolution_m, origin=base.origin,
                                   occupied_threshold=base.occupied_threshold, name=base.name, source=base.source)

@@ -42,7 +42,8 @@ def exact_reach_m(planner: HybridAStar) -> float:
     res = planner.grid.resolution_m
     r_c = planner.footprint.radius_m
     needed = max(CLEARANCE_REACH_M + r_c,
-                 r_c + max(o.proximity_range_m, planner.robot.preferred_clearance_m) + planner.robot.preferred_clearance_m,
+                 r_c + max(o.proximity_range_m, planner.robot.preferred_clearance_m)
+                 + planner.robot.preferred_clearance_m,
                  planner.centre_threshold_m)
     return needed + 2.0 * math.sqrt(2.0) * res
 
@@ -125,7 +126,8 @@ def _patch(planner: HybridAStar, outer: CellRect, members: list[CellRect], n_rea
     pad = ((1 if outer.iy0 == 0 else 0, 1 if outer.iy1 == h else 0),
            (1 if outer.ix0 == 0 else 0, 1 if outer.ix1 == w else 0))
     padded = np.pad(blocked_outer, pad, constant_values=True)
-    edt = distance_transform_edt(~padded) if padded.any() else np.full(padded.shape, np.inf)
+    edt: np.ndarray = (np.asarray(distance_transform_edt(~padded), dtype=float) if padded.any()
+                       else np.full(padded.shape, np.inf))
     edt = edt[pad[0][0]:edt.shape[0] - pad[0][1], pad[1][0]:edt.shape[1] - pad[1][1]]
     # exact wherever ≤ the cap: an obstacle outside the window is farther than the cap from every written cell
     edt = np.minimum(edt * res - math.sqrt(2.0) * res, cap)
