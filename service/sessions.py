@@ -146,7 +146,7 @@ class SessionStore:
         session = LiveSession(live, robot, options or PlannerOptions(allow_unknown=True), policy or ReplanPolicy())
         entry = Entry(sid, client, session, name or grid.name)
         session.listeners.append(lambda event: self._publish(entry, event))
-        session.set_pose(start)
+        session.set_pose(start, field="start")
         with self._lock:
             if len(self._sessions) >= lim.max_sessions:
                 raise ServiceBusy(len(self._sessions), 5)
@@ -217,7 +217,12 @@ class SessionStore:
         self.check_size(observation)
         with entry.lock:
             self._throttle(entry)
-            update, event = entry.session.observe(observation)
+            try:
+                update, event = entry.session.observe(observation)
+            except InvalidInput as exc:
+                if isinstance(observation, RegionUpdate) and not exc.field.startswith("region."):
+                    raise InvalidInput(f"region.{exc.field}", exc.msg) from None
+                raise
         data = update.to_json()
         for q in list(entry.subscribers):
             if update.changed is not None:

@@ -13,6 +13,7 @@ import numpy as np
 from pydantic import Field, model_validator
 
 from planner.live.observations import Observation, PointObservation, RegionUpdate, ScanObservation, SensorPose
+from planner.errors import InvalidInput
 from planner.live.obstacle_layer import ObstacleLayerParams
 from service.wire import Angle, MapSpec, Metres, Name, PoseIn, _Strict
 
@@ -162,6 +163,12 @@ class ObservationIn(_Strict):
         return self
 
     def value(self) -> Observation:
+        """The planner's observation; a value the planner refuses is named under this message's part
+        (``scan.sensor_pose.yaw``, ``region.data``)."""
+        name = "points" if self.points is not None else "scan" if self.scan is not None else "region"
         part = self.points or self.scan or self.region
         assert part is not None
-        return part.value()
+        try:
+            return part.value()
+        except InvalidInput as exc:
+            raise InvalidInput(f"{name}.{exc.field}", exc.msg) from None

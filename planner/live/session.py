@@ -151,9 +151,10 @@ class LiveSession:
 
     # ------------------------------------------------------------------ inputs
 
-    def set_pose(self, pose: Any, now_s: float | None = None) -> ReplanEvent | None:
-        """The robot's current pose (x, y, yaw in the map frame, from odometry); replans on the timer."""
-        self.pose = _pose(pose, "pose")
+    def set_pose(self, pose: Any, now_s: float | None = None, field: str = "pose") -> ReplanEvent | None:
+        """The robot's current pose (x, y, yaw in the map frame, from odometry); replans on the timer. A bad pose
+        is refused naming ``field``."""
+        self.pose = _pose(pose, field)
         self._advance()
         if self.goal is not None and not self.arrived and self.policy.period_s is not None:
             now = self.clock() if now_s is None else now_s
