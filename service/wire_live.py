@@ -12,8 +12,8 @@ from typing import Annotated, Any, Literal
 import numpy as np
 from pydantic import Field, model_validator
 
-from planner.live.observations import Observation, PointObservation, RegionUpdate, ScanObservation, SensorPose
 from planner.errors import InvalidInput
+from planner.live.observations import Observation, PointObservation, RegionUpdate, ScanObservation, SensorPose
 from planner.live.obstacle_layer import ObstacleLayerParams
 from service.wire import Angle, MapSpec, Metres, Name, PoseIn, _Strict
 

@@ -2,7 +2,8 @@
 simulated range sensor has seen; replan when the path is blocked (docs/live.md).
 
 sphereplan explore --map KNOWN.yaml --world TRUE.yaml --start X Y YAW --goal X Y YAW [--robot P]
-                   [--sensor-range 10] [--seed N] [--tracker mpc|pursuit] [--plot F.png] [--out F.json|F.mcap]
+                   [--sensor-range 10] [--seed N] [--tracker mpc|pursuit] [--plan-time-limit S]
+                   [--plot F.png] [--out F.json|F.mcap]
 
 Exit codes: 0 the sphere reached the goal; 2 bad input; 3 no path (the planner found none on what it knew,
 and nothing new could be seen); 4 simulated time ran out; 5 the sphere collided with the true world.
@@ -56,6 +57,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="mpc = paper 001 eq. 15 with pure-pursuit fallback (default); pursuit = geometric only")
     parser.add_argument("--replan-period", type=positive_float, default=None, metavar="S",
                         help="also replan every S s of simulated time (default: only when the path is blocked)")
+    parser.add_argument("--plan-time-limit", type=positive_float, default=2.0, metavar="S",
+                        help="time limit of each (re)plan, s (default 2)")
     parser.add_argument("--time-limit", type=positive_float, default=None, metavar="S",
                         help="simulated seconds before giving up (default 3 × straight distance / speed + 60)")
     parser.add_argument("--out", metavar="F.json", help="write the result here (default: stdout); a name ending in "
@@ -110,7 +113,8 @@ def run(args: argparse.Namespace) -> int:
                                       f"{known.resolution_m} m from {list(known.origin)}), got {world.width}×"
                                       f"{world.height} of {world.resolution_m} m from {list(world.origin)}")
     options = ExploreOptions(sensor=RangeSensor(range_m=args.sensor_range), sensor_rate_hz=args.sensor_rate,
-                             tracker=args.tracker, replan_period_s=args.replan_period, time_limit_s=args.time_limit)
+                             tracker=args.tracker, replan_period_s=args.replan_period, time_limit_s=args.time_limit,
+                             plan_time_limit_s=args.plan_time_limit)
     with Stages("explore", ["explore", *(["plot"] if args.plot else [])]) as stages:
         stages.start("explore")
         result = explore(known, world, robot, start, goal, options, seed=args.seed)

@@ -78,7 +78,8 @@ def test_event_stream_carries_the_new_path(client: TestClient, session: dict[str
 
     def block_later() -> None:
         time.sleep(0.5)
-        client.post(f"/v1/sessions/{sid}/observations", json={"points": {"points": gap_wall(), "origin": [3.0, 5.5, 0.3]}})
+        client.post(f"/v1/sessions/{sid}/observations",
+                    json={"points": {"points": gap_wall(), "origin": [3.0, 5.5, 0.3]}})
 
     threading.Thread(target=block_later).start()
     events = []
@@ -137,12 +138,14 @@ def test_bad_observations_and_limits(client: TestClient, session: dict[str, Any]
         assert r.status_code == 422 and r.json()["field"] == field, r.text
     assert client.post("/v1/sessions/no-such/pose", json=pose(HALL_START)).status_code == 404
     # the update rate and the sessions per client are bounded
-    client.app.state.sessions = SessionStore(SessionLimits(min_update_interval_s=60, max_sessions_per_client=1))  # type: ignore[attr-defined]
+    limits = SessionLimits(min_update_interval_s=60, max_sessions_per_client=1)
+    client.app.state.sessions = SessionStore(limits)  # type: ignore[attr-defined]
     r = client.post("/v1/sessions", json={"map": "hall", "start": pose(HALL_START)})
     sid = r.json()["id"]
-    ok = client.post(f"/v1/sessions/{sid}/observations", json={"points": {"points": [[3, 3, 0.3]], "origin": [2, 2, 0.3]}})
+    one = {"points": {"points": [[3, 3, 0.3]], "origin": [2, 2, 0.3]}}
+    ok = client.post(f"/v1/sessions/{sid}/observations", json=one)
     assert ok.status_code == 200
-    busy = client.post(f"/v1/sessions/{sid}/observations", json={"points": {"points": [[3, 3, 0.3]], "origin": [2, 2, 0.3]}})
+    busy = client.post(f"/v1/sessions/{sid}/observations", json=one)
     assert busy.status_code == 503 and "Retry-After" in busy.headers
     second = client.post("/v1/sessions", json={"map": "hall", "start": pose(HALL_START)})
     assert second.status_code == 422 and second.json()["field"] == "session"
