@@ -37,12 +37,15 @@ from planner.hybrid_astar.search import PlannerOptions
 from planner.live import ObstacleLayerParams, ReplanEvent, ReplanPolicy
 from planner.occupancy import UNKNOWN, OccupancyGrid
 from service.core import PlanningService
+from service.http import ERRORS
 from service.outcome import outcome_of_exception
 from service.sessions import Entry, SessionStore, map_json, path_json
-from service.wire import NAME_PATTERN, InlineGrid, PoseIn, RosOccupancyGrid
+from service.wire import NAME_PATTERN, ErrorBody, InlineGrid, PoseIn, RosOccupancyGrid
 from service.wire_live import ObservationIn, SessionCreate
 
-router = APIRouter(prefix="/v1/sessions", tags=["sessions"])
+SESSION_ERRORS: dict[int | str, dict[str, Any]] = {
+    **ERRORS, 429: {"model": ErrorBody, "description": "updates too fast for the session: retry after Retry-After s"}}
+router = APIRouter(prefix="/v1/sessions", tags=["sessions"], responses=SESSION_ERRORS)
 
 SessionId = Annotated[str, PathParam(pattern=NAME_PATTERN, description="the session's id")]
 SSE_POLL_S = 0.1
@@ -177,7 +180,7 @@ async def get_session_map(sid: SessionId, store: Store) -> Response:
     return Response(body, media_type="application/json")
 
 
-@router.get("/{sid}/map.png")
+@router.get("/{sid}/map.png", response_class=Response, responses={200: {"content": {"image/png": {}}}})
 async def get_session_map_png(sid: SessionId, store: Store) -> Response:
     """The live map as a PNG (free white, occupied black, unknown grey, north up)."""
     from service.grids import grid_png
@@ -187,7 +190,8 @@ async def get_session_map_png(sid: SessionId, store: Store) -> Response:
     return Response(png, media_type="image/png")
 
 
-@router.get("/{sid}/events")
+# not in the OpenAPI schema: an event stream has no response schema, and it runs until the session ends
+@router.get("/{sid}/events", include_in_schema=False)
 async def get_events(request: Request, sid: SessionId, store: Store,
                      max_events: Annotated[int | None, Query(ge=1, le=100_000)] = None) -> StreamingResponse:
     """Server-Sent Events of the session: ``replan`` (the event, the new path, the status), ``map`` (an update's

@@ -38,6 +38,15 @@ class ServiceBusy(Exception):
         self.retry_after_s = retry_after_s
 
 
+class RateLimited(ServiceBusy):
+    """One client sent updates (a robot session's observations) faster than allowed; retry after
+    ``retry_after_s`` seconds."""
+
+    def __init__(self, msg: str, retry_after_s: int = 1) -> None:
+        Exception.__init__(self, msg)
+        self.retry_after_s = retry_after_s
+
+
 @dataclass(frozen=True)
 class Answer:
     """One row of the table: what kind of answer an error is and how each door gives it.
@@ -61,6 +70,7 @@ ANSWERS: dict[type[BaseException], Answer] = {
     PlanningError: Answer("failed", EXIT_NO_SOLUTION, "no path", 422, "reply_err"),
     NotFound: Answer("not_found", EXIT_BAD_INPUT, "error", 404, "reply_err"),
     SpherePlanError: Answer("bad_input", EXIT_BAD_INPUT, "error", 422, "reply_err"),
+    RateLimited: Answer("busy", EXIT_FAULT, "busy", 429, "reply_err"),
     ServiceBusy: Answer("busy", EXIT_FAULT, "busy", 503, "reply_err"),
     BaseException: Answer("internal", EXIT_FAULT, "internal error", 500, "reply_err"),
 }

@@ -10,7 +10,7 @@ where its map changed.
 Bounds (:class:`SessionLimits`), each refused naming the field: sessions in all and per client, cells of a
 session's map (its memory: the live map and the planner's distance field grow with it), points per
 observation, beams per scan, cells per region update, and the update rate of a session (a faster sender is
-answered "busy" with ``Retry-After``, :class:`service.outcome.ServiceBusy`). Sessions idle longer than
+answered 429 with ``Retry-After``, :class:`service.outcome.RateLimited`). Sessions idle longer than
 ``idle_timeout_s`` are dropped.
 """
 
@@ -43,7 +43,7 @@ from planner.live import (
 )
 from planner.occupancy import OccupancyGrid
 from planner.robot import RobotProfile
-from service.outcome import ServiceBusy
+from service.outcome import RateLimited, ServiceBusy
 
 log = logging.getLogger(__name__)
 
@@ -62,14 +62,6 @@ class SessionLimits:
     idle_timeout_s: float = 900.0
     max_time_limit_s: float = 10.0
     queue_events: int = 64
-
-
-class RateLimited(ServiceBusy):
-    """A session was sent updates faster than its limit allows."""
-
-    def __init__(self, msg: str, retry_after_s: int = 1) -> None:
-        Exception.__init__(self, msg)
-        self.retry_after_s = retry_after_s
 
 
 @dataclass

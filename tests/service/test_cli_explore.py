@@ -39,7 +39,8 @@ def maps(tmp_path: Path) -> Path:
 
 def explore(maps: Path, world: str, *extra: str) -> list[str]:
     return ["explore", "--map", str(maps / "known.yaml"), "--world", str(maps / world), "--start", "1.5", "3", "0",
-            "--goal", "10.5", "3", "0", "--sensor-range", "3", "--tracker", "pursuit", "--seed", "3", "--plan-time-limit", "1", "-q", *extra]
+            "--goal", "10.5", "3", "0", "--sensor-range", "3", "--tracker", "pursuit", "--seed", "3",
+            "--plan-time-limit", "1", "-q", *extra]
 
 
 def test_hidden_box_is_found_and_driven_around(maps: Path, capsys: pytest.CaptureFixture[str]) -> None:

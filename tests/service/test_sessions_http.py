@@ -146,6 +146,6 @@ def test_bad_observations_and_limits(client: TestClient, session: dict[str, Any]
     ok = client.post(f"/v1/sessions/{sid}/observations", json=one)
     assert ok.status_code == 200
     busy = client.post(f"/v1/sessions/{sid}/observations", json=one)
-    assert busy.status_code == 503 and "Retry-After" in busy.headers
+    assert busy.status_code == 429 and "Retry-After" in busy.headers
     second = client.post("/v1/sessions", json={"map": "hall", "start": pose(HALL_START)})
     assert second.status_code == 422 and second.json()["field"] == "session"
