@@ -34,7 +34,7 @@ from planner.closed_loop.tracker import (
     PurePursuitTracker,
     ReferencePath,
 )
-from planner.errors import InvalidInput, PlanningError
+from planner.errors import InvalidInput, PlannerTimedOut, PlanningError
 from planner.hybrid_astar.search import HybridAStar, PlannerOptions, Pose
 from planner.kinematics import SphereState, wrap
 from planner.live.live_map import LiveMap
@@ -56,7 +56,9 @@ MAX_SNAPSHOTS = 6
 class ExploreOptions:
     """Settings of one exploration run. ``time_limit_s`` None = 3 × the straight start–goal distance at
     cruise speed + 60 s of simulated time; ``max_stalled_sweeps``: sweeps the robot may stand still
-    without a path (each failed replan retried when the map changed) before the run ends as ``no_path``."""
+    without a path (each failed replan retried when the map changed) before the run ends as ``no_path``; a
+    replan that ran out of its ``plan_time_limit_s`` is retried at every sweep instead (a timeout proves
+    nothing), until the simulated time runs out."""
 
     sensor: RangeSensor = field(default_factory=RangeSensor)
     sensor_rate_hz: float = 5.0
@@ -64,7 +66,7 @@ class ExploreOptions:
     tracker: str = "mpc"
     time_limit_s: float | None = None
     replan_period_s: float | None = None
-    plan_time_limit_s: float = 2.0
+    plan_time_limit_s: float = 5.0
     goal_tolerance_m: float = 0.25
     max_stalled_sweeps: int = 10
     planner: PlannerOptions = field(default_factory=lambda: PlannerOptions(allow_unknown=True))
@@ -199,7 +201,11 @@ def explore(known: OccupancyGrid, world: OccupancyGrid, robot: RobotProfile, sta
         if k > 0 and k % sweep_every == 0:
             sweep()
             adopt(session.set_pose((state.x, state.y, wrap(state.yaw)), t_sim))
-            stalled = stalled + 1 if ref is None and abs(state.v) < 1e-3 else 0
+            failure = session.last_failure
+            timed_out = ref is None and failure is not None and failure.error_code == PlannerTimedOut.code
+            if timed_out and abs(state.v) < 1e-3:
+                adopt(session.replan("request"))  # the search ran out of time: try again (not proof of no path)
+            stalled = stalled + 1 if ref is None and abs(state.v) < 1e-3 and not timed_out else 0
             if stalled >= opts.max_stalled_sweeps:
                 outcome = "no_path"
                 break
