@@ -57,8 +57,8 @@ class ExploreOptions:
     """Settings of one exploration run. ``time_limit_s`` None = 3 × the straight start–goal distance at
     cruise speed + 60 s of simulated time; ``max_stalled_sweeps``: sweeps the robot may stand still
     without a path (each failed replan retried when the map changed) before the run ends as ``no_path``; a
-    replan that ran out of its ``plan_time_limit_s`` is retried at every sweep instead (a timeout proves
-    nothing), until the simulated time runs out."""
+    replan that ran out of its ``plan_time_limit_s`` (which proves nothing) is first retried up to
+    ``timeout_retries`` times with twice, four times ... the limit."""
 
     sensor: RangeSensor = field(default_factory=RangeSensor)
     sensor_rate_hz: float = 5.0
@@ -69,6 +69,7 @@ class ExploreOptions:
     plan_time_limit_s: float = 5.0
     goal_tolerance_m: float = 0.25
     max_stalled_sweeps: int = 10
+    timeout_retries: int = 2
     planner: PlannerOptions = field(default_factory=lambda: PlannerOptions(allow_unknown=True))
 
     def __post_init__(self) -> None:
@@ -156,6 +157,7 @@ def explore(known: OccupancyGrid, world: OccupancyGrid, robot: RobotProfile, sta
     seg_i = 0
     s_proj = 0.0
     stalled = 0
+    retries = 0
     outcome = "timeout"
 
     def adopt(event: ReplanEvent | None) -> None:
@@ -202,10 +204,16 @@ def explore(known: OccupancyGrid, world: OccupancyGrid, robot: RobotProfile, sta
             sweep()
             adopt(session.set_pose((state.x, state.y, wrap(state.yaw)), t_sim))
             failure = session.last_failure
-            timed_out = ref is None and failure is not None and failure.error_code == PlannerTimedOut.code
-            if timed_out and abs(state.v) < 1e-3:
-                adopt(session.replan("request"))  # the search ran out of time: try again (not proof of no path)
-            stalled = stalled + 1 if ref is None and abs(state.v) < 1e-3 and not timed_out else 0
+            stopped = ref is None and abs(state.v) < 1e-3
+            if stopped and failure is not None and failure.error_code == PlannerTimedOut.code and \
+                    retries < opts.timeout_retries:
+                # the search ran out of time, which proves nothing: try again with twice the time
+                retries += 1
+                adopt(session.replan("request", time_limit_s=opts.plan_time_limit_s * 2 ** retries))
+                stopped = ref is None
+            if ref is not None:
+                retries = 0
+            stalled = stalled + 1 if stopped else 0
             if stalled >= opts.max_stalled_sweeps:
                 outcome = "no_path"
                 break

@@ -259,8 +259,9 @@ class LiveSession:
     # ------------------------------------------------------------------ planning
 
     def replan(self, reason: str, t_trigger: float | None = None,
-               blocked_at: tuple[float, float] | None = None) -> ReplanEvent:
-        """Plan from the current pose to the goal now; the event goes to every listener."""
+               blocked_at: tuple[float, float] | None = None, time_limit_s: float | None = None) -> ReplanEvent:
+        """Plan from the current pose to the goal now (within ``time_limit_s``, default the policy's); the event
+        goes to every listener."""
         if reason not in REASONS:
             raise InvalidInput("reason", f"must be one of {', '.join(REASONS)}, got {reason!r}")
         if self.pose is None or self.goal is None:
@@ -274,7 +275,8 @@ class LiveSession:
         self._last_plan_t = self.clock()
         start = self.pose
         try:
-            result = self._planner.plan(start, self.goal, Termination(self.policy.time_limit_s))
+            limit = self.policy.time_limit_s if time_limit_s is None else time_limit_s
+            result = self._planner.plan(start, self.goal, Termination(limit))
         except PlanningError as exc:
             self.path = None
             self._progress = _Progress()

