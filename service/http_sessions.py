@@ -37,14 +37,19 @@ from planner.hybrid_astar.search import PlannerOptions
 from planner.live import ObstacleLayerParams, ReplanEvent, ReplanPolicy
 from planner.occupancy import UNKNOWN, OccupancyGrid
 from service.core import PlanningService
-from service.http import ERRORS
 from service.outcome import outcome_of_exception
 from service.sessions import Entry, SessionStore, map_json, path_json
 from service.wire import NAME_PATTERN, ErrorBody, InlineGrid, PoseIn, RosOccupancyGrid
 from service.wire_live import ObservationIn, SessionCreate
 
+#: the error statuses of the session routes (as service.http documents its own; not imported: http imports this)
 SESSION_ERRORS: dict[int | str, dict[str, Any]] = {
-    **ERRORS, 429: {"model": ErrorBody, "description": "updates too fast for the session: retry after Retry-After s"}}
+    code: {"model": ErrorBody, "description": text} for code, text in
+    ((400, "malformed request"), (401, "bearer token missing or wrong (servers with --token-file)"),
+     (404, "unknown session, map or robot"), (413, "body too large"), (415, "body is not JSON"),
+     (422, "invalid request, or no path"), (429, "updates too fast for the session: retry after Retry-After s"),
+     (503, "too many sessions: retry after Retry-After seconds"))
+}
 router = APIRouter(prefix="/v1/sessions", tags=["sessions"], responses=SESSION_ERRORS)
 
 SessionId = Annotated[str, PathParam(pattern=NAME_PATTERN, description="the session's id")]
