@@ -465,16 +465,22 @@ def create_app(settings: ServiceSettings | None = None, service: PlanningService
     async def lifespan(app: FastAPI) -> AsyncIterator[None]:
         node = None
         await asyncio.to_thread(app.state.parse_gate.warm)
+        live = None
         await asyncio.to_thread(svc.start)
         try:
             if settings.zenoh:
+                from service.zenoh_live import start_live_doors
                 from service.zenoh_node import ZenohNode
 
                 node = ZenohNode(svc, settings, parse_gate=app.state.parse_gate)
                 await asyncio.to_thread(node.start)
+                live = await asyncio.to_thread(start_live_doors, svc, app.state.sessions, node, settings)
             log.info("sphereplan service ready (%d workers, warm-up %.1f s)", settings.workers, svc.warm_up_s)
             yield
         finally:
+            app.state.sessions.close()
+            for door in live or []:
+                await asyncio.to_thread(door.close)
             if node is not None:
                 await asyncio.to_thread(node.close)
             await asyncio.to_thread(svc.close)
@@ -491,6 +497,10 @@ def create_app(settings: ServiceSettings | None = None, service: PlanningService
     )
     app.state.service = svc
     app.state.parse_gate = ParseGate(retry_after_s=settings.retry_after_s)
+    from service.http_sessions import router as sessions
+    from service.sessions import SessionStore
+
+    app.state.sessions = SessionStore()
     app.include_router(health)
     app.include_router(plan)
     app.include_router(simulate)
@@ -501,6 +511,7 @@ def create_app(settings: ServiceSettings | None = None, service: PlanningService
     app.include_router(maps)
     app.include_router(robots)
     app.include_router(viewer)
+    app.include_router(sessions)
     install_error_handlers(app)
     app.openapi = _openapi_with_bodies(app)  # type: ignore[method-assign]
     app.add_middleware(BodyLimit, limit=settings.max_body_bytes)

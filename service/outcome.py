@@ -49,6 +49,15 @@ class Unauthorized(Exception):
     field = "authorization"
 
 
+class RateLimited(ServiceBusy):
+    """One client sent updates (a robot session's observations) faster than allowed; retry after
+    ``retry_after_s`` seconds."""
+
+    def __init__(self, msg: str, retry_after_s: int = 1) -> None:
+        Exception.__init__(self, msg)
+        self.retry_after_s = retry_after_s
+
+
 @dataclass(frozen=True)
 class Answer:
     """One row of the table: what kind of answer an error is and how each door gives it.
@@ -72,6 +81,7 @@ ANSWERS: dict[type[BaseException], Answer] = {
     PlanningError: Answer("failed", EXIT_NO_SOLUTION, "no path", 422, "reply_err"),
     NotFound: Answer("not_found", EXIT_BAD_INPUT, "error", 404, "reply_err"),
     SpherePlanError: Answer("bad_input", EXIT_BAD_INPUT, "error", 422, "reply_err"),
+    RateLimited: Answer("busy", EXIT_FAULT, "busy", 429, "reply_err"),
     ServiceBusy: Answer("busy", EXIT_FAULT, "busy", 503, "reply_err"),
     WorkerLost: Answer("unavailable", EXIT_FAULT, "unavailable", 503, "reply_err"),
     Unauthorized: Answer("unauthorized", EXIT_BAD_INPUT, "error", 401, "reply_err"),

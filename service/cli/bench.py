@@ -34,13 +34,16 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--rrt-time", type=finite_float, default=2.0, help="RRT* budget, s (0 = skip)")
     parser.add_argument("--csv", default=None, help="CSV output (default bench.csv; bench_real.csv for --suite real)")
     parser.add_argument("--png", default=None, help="PNG output (default bench.png; bench_real.png for --suite real)")
-    parser.add_argument("--suite", choices=("planning", "reconfigure", "mpc", "all", "real", "perception", "load"),
+    parser.add_argument("--suite",
+                        choices=("planning", "reconfigure", "mpc", "all", "real", "perception", "load", "explore"),
                         default="planning",
                         help="planning: Hybrid A* vs OMPL on the shipped problems (default); reconfigure: Spherobot "
                              "plan times; mpc: MPC step times of the tracker; all: those three; real: random "
                              "problems on Nav2's maps against BIT* (minutes); perception: stereo and EIS times at "
                              "paper 001's three resolutions; load: the service under load, one instance vs two "
-                             "behind HAProxy, and failover (needs haproxy; minutes)")
+                             "behind HAProxy, and failover (needs haproxy; minutes); explore: live-map exploration "
+                             "of seeded worlds with hidden obstacles (tens of minutes; --problems filters by world "
+                             "name)")
     real = parser.add_argument_group("--suite real")
     real.add_argument("--real-maps", default=None,
                       help="comma-separated map names in maps/real or YAML paths (default: every map in maps/real)")
@@ -153,6 +156,11 @@ def run(args: argparse.Namespace) -> int:
         if not 1 <= args.workers <= 64:
             raise InvalidInput("--workers", "must be in [1, 64]")
         return fleet_main(args.duration, args.workers)
+    if args.suite == "explore":
+        from lab.explore_bench import main as explore_main
+
+        explore_main(args.robot, only=args.problems, quiet=quiet())
+        return 0
     if args.runs < 1:
         raise InvalidInput("--runs", "must be ≥ 1")
     if args.suite == "perception":

@@ -11,7 +11,7 @@ const viewer = {
   ready: false, busy: false,
   map: null, info: null, image: null, robots: {},
   start: null, goal: null,
-  plan: null, sim: null, rec: null, lastRequest: null, error: null,
+  plan: null, sim: null, rec: null, lastRequest: null, error: null, live: null,
   scale: 1,  // canvas px per cell
 };
 window.viewer = viewer;
@@ -171,6 +171,7 @@ function refreshControls() {
   const ready = viewer.ready && !viewer.busy && viewer.start && viewer.goal;
   $("plan").disabled = !ready;
   $("reconfigure").disabled = !ready;
+  $("live").disabled = !ready;
   $("simulate").disabled = !(ready && viewer.plan);
 }
 
@@ -207,6 +208,7 @@ canvas.addEventListener("mousedown", (ev) => {
   if (!viewer.ready) return;
   const [x, y] = eventWorld(ev);
   const which = $("mode").value;
+  if (which === "obstacle") { reportObstacle(x, y); return; }
   viewer[which] = { x, y, yaw: viewer[which]?.yaw ?? 0 };
   dragging = which;
   draw(); refreshControls();
@@ -285,6 +287,59 @@ $("reconfigure").addEventListener("click", () => run("reconfigure", "rec", async
   $("r-pos").textContent = fmt(rec.final.position_error_m * 1000, "mm", 2);
   $("r-p").textContent = fmt((rec.final.p_from_top_rad * 180) / Math.PI, "°", 3);
 }));
+
+// ------------------------------------------------------------------------------------ live session
+
+async function reloadLiveMap() {
+  const image = new Image();
+  await new Promise((resolve, reject) => {
+    image.onload = resolve;
+    image.onerror = () => reject(new Error("cannot load the live map"));
+    image.src = `/v1/sessions/${viewer.live.id}/map.png?t=${Date.now()}`;
+  });
+  viewer.image = image;
+  draw();
+}
+
+function showLive(status) {
+  $("l-replans").textContent = String(status.replans);
+  const last = status.last_replan;
+  $("l-last").textContent = last ? `${last.reason}, ${last.ok ? "ok" : "failed " + last.error_code}, ` +
+    `${(last.latency_s * 1000).toFixed(0)} ms` : "–";
+  $("l-known").textContent = `${(status.known_fraction * 100).toFixed(1)} %`;
+}
+
+$("live").addEventListener("click", () => run("live session", async () => {
+  if (viewer.live) { viewer.live.events.close(); await api("DELETE", `/v1/sessions/${viewer.live.id}`).catch(() => null); }
+  const body = { map: viewer.map, robot: $("robot").value, start: viewer.start, goal: viewer.goal };
+  const session = await api("POST", "/v1/sessions", body);
+  const events = new EventSource(`/v1/sessions/${session.id}/events`);
+  viewer.live = { id: session.id, events };
+  $("l-id").textContent = session.id;
+  viewer.plan = session.path; viewer.sim = viewer.rec = null;
+  if (session.path) showPlan(session.path);
+  showLive(session.status);
+  events.addEventListener("replan", (e) => {
+    const data = JSON.parse(e.data);
+    viewer.plan = data.path;
+    if (data.path) showPlan(data.path); else $("n-status").textContent = `failed: ${data.replan.error_msg}`;
+    showLive(data.status);
+    reloadLiveMap().catch((err) => status(err.message));
+  });
+  events.addEventListener("map", () => reloadLiveMap().catch((err) => status(err.message)));
+}));
+
+// a 0.6 m obstacle reported as points seen from the start (as a range sensor on the robot would)
+async function reportObstacle(x, y) {
+  if (!viewer.live) { status("start a live session first"); return; }
+  const points = [];
+  for (let dx = -0.3; dx <= 0.3; dx += 0.05) for (let dy = -0.3; dy <= 0.3; dy += 0.05) points.push([x + dx, y + dy, 0.3]);
+  const origin = [viewer.start.x, viewer.start.y, 0.3];
+  try {
+    await api("POST", `/v1/sessions/${viewer.live.id}/observations`, { points: { points, origin } });
+    await reloadLiveMap();
+  } catch (err) { status(`obstacle: ${err.message}`); }
+}
 
 $("map").addEventListener("change", () => loadMap($("map").value).catch((e) => status(e.message)));
 

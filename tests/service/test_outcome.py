@@ -9,7 +9,15 @@ import pytest
 import planner.errors as errors
 from planner.errors import BadEndpoint, PlanningError, StartOccupied
 from service.http import outcome_response
-from service.outcome import ServiceBusy, Unauthorized, WorkerLost, answer_for, ok_outcome, outcome_of_exception
+from service.outcome import (
+    RateLimited,
+    ServiceBusy,
+    Unauthorized,
+    WorkerLost,
+    answer_for,
+    ok_outcome,
+    outcome_of_exception,
+)
 
 # error type → (kind, CLI exit code, HTTP status, Zenoh reply) as docs/contracts.md and docs/service.md say
 DOCUMENTED: dict[type[BaseException], tuple[str, int, int, str]] = {
@@ -30,6 +38,7 @@ DOCUMENTED: dict[type[BaseException], tuple[str, int, int, str]] = {
     ServiceBusy: ("busy", 1, 503, "reply_err"),
     WorkerLost: ("unavailable", 1, 503, "reply_err"),  # a worker died or hung under the job: a server fault
     Unauthorized: ("unauthorized", 2, 401, "reply_err"),
+    RateLimited: ("busy", 1, 429, "reply_err"),
     RuntimeError: ("internal", 1, 500, "reply_err"),
 }
 
@@ -66,6 +75,8 @@ def _instance(error: type[BaseException]) -> BaseException:
         return error("field", "message")
     if error is ServiceBusy:
         return ServiceBusy(3, 1)
+    if error is RateLimited:
+        return RateLimited("too fast", 1)
     return error("message")
 
 
@@ -74,6 +85,6 @@ def test_http_and_zenoh_answer_by_the_row() -> None:
         outcome = outcome_of_exception(_instance(error))
         response = outcome_response(outcome, retry_after_s=2)
         assert response.status_code == status, error
-        assert response.headers.get("retry-after") == ("2" if error in (ServiceBusy, WorkerLost) else None)
+        assert response.headers.get("retry-after") == ("2" if error in (ServiceBusy, WorkerLost, RateLimited) else None)
         assert outcome.answer.zenoh_reply == reply
     assert outcome_response(ok_outcome({})).status_code == 200 and ok_outcome({}).answer.zenoh_reply == "reply"

@@ -1,0 +1,317 @@
+"""A robot session: a live map, the goal, the robot's pose and its path, replanned when the path is blocked.
+
+:class:`LiveSession` is the transport-free loop every door drives (HTTP session resource, Zenoh topics,
+ROS 2 over rmw_zenoh, ``sphereplan explore``): the door hands it poses (odometry), observations and goals;
+the session updates its :class:`~planner.live.live_map.LiveMap`, refreshes its planner for the changed cells
+(:mod:`planner.live.refresh`), checks the rest of the path with the robot's real footprint (covering circles,
+then the exact polygon: :meth:`planner.maps.clearance.ClearanceMap.footprint_margins`) and replans from the
+current pose when it is blocked, when the goal changes, when a failed plan may now succeed (the map changed)
+or on a timer (``ReplanPolicy.period_s``). Each replan is a :class:`ReplanEvent` saying why and how long it
+took; listeners get every event (the doors publish the new path from there).
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections import deque
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from planner.errors import GoalOccupied, InvalidInput, PlanningError, StartOccupied
+from planner.hybrid_astar.search import HybridAStar, PlannerOptions, Pose
+from planner.kinematics import wrap
+from planner.live.live_map import CellRect, LiveMap, MapUpdate
+from planner.live.observations import Observation
+from planner.live.refresh import capped, refresh
+from planner.result import PlanResult
+from planner.robot import RobotProfile
+from planner.termination import Termination
+
+EVENTS_KEPT = 256
+"""Replan events a session remembers (older ones are dropped)."""
+
+MAX_PENDING_REGIONS = 256
+"""Changed rectangles a session collects before refreshing; beyond that they are merged into one."""
+
+REASONS = ("goal", "blocked", "timer", "map_changed", "request")
+"""Why a session replans: a new goal, the path ahead is blocked, the replan timer, a failed plan retried
+after the map changed, or a caller asked."""
+
+
+@dataclass(frozen=True)
+class ReplanPolicy:
+    """When to replan. ``period_s``: also replan this often while a goal is active (None = only when needed,
+    as Nav2's planner server with ``expected_planner_frequency`` 0); ``time_limit_s``: each plan's limit;
+    ``arrival_tolerance_m``: the goal counts as reached (no more replans) this close; ``retry_period_s``: after a
+    failed plan, a map change triggers a new attempt at most this often (a stopped robot's flickering sensor
+    noise must not replan at the sensor's rate)."""
+
+    period_s: float | None = None
+    time_limit_s: float = 2.0
+    arrival_tolerance_m: float = 0.25
+    retry_period_s: float = 1.0
+
+    def __post_init__(self) -> None:
+        if self.period_s is not None and not (math.isfinite(self.period_s) and self.period_s > 0):
+            raise InvalidInput("replan_period_s", f"must be a finite number of seconds > 0, got {self.period_s!r}")
+        if not (math.isfinite(self.time_limit_s) and 0 < self.time_limit_s <= 60):
+            raise InvalidInput("time_limit_s", f"must be in (0, 60] s, got {self.time_limit_s!r}")
+        if not (math.isfinite(self.arrival_tolerance_m) and self.arrival_tolerance_m > 0):
+            raise InvalidInput("arrival_tolerance_m", "must be a finite number > 0")
+        if not (math.isfinite(self.retry_period_s) and self.retry_period_s >= 0):
+            raise InvalidInput("retry_period_s", "must be a finite number of seconds ≥ 0")
+
+
+@dataclass(frozen=True)
+class ReplanEvent:
+    """One replan: ``seq`` counts the session's plans from 1; ``reason`` is one of :data:`REASONS`;
+    ``latency_s`` runs from the trigger (observation applied, pose or goal received) to the new path, and
+    splits into ``refresh_s`` (bringing the planner's distance field and heuristic up to date) and
+    ``planning_time_s`` (the search); ``blocked_at`` is the first blocked pose of the old path."""
+
+    seq: int
+    reason: str
+    ok: bool
+    error_code: int
+    error_msg: str
+    latency_s: float
+    refresh_s: float
+    planning_time_s: float
+    length_m: float
+    start: Pose
+    blocked_at: tuple[float, float] | None = None
+    refresh_mode: str = ""
+
+    def to_json(self) -> dict[str, Any]:
+        return {
+            "seq": self.seq, "reason": self.reason, "ok": self.ok, "error_code": self.error_code,
+            "error_msg": self.error_msg, "latency_s": round(self.latency_s, 6), "refresh_s": round(self.refresh_s, 6),
+            "planning_time_s": round(self.planning_time_s, 6), "length_m": self.length_m,
+            "start": {"x": self.start[0], "y": self.start[1], "yaw": self.start[2]},
+            "blocked_at": None if self.blocked_at is None else {"x": self.blocked_at[0], "y": self.blocked_at[1]},
+            "refresh_mode": self.refresh_mode,
+        }
+
+
+def _pose(value: Any, field_name: str) -> Pose:
+    try:
+        x, y, yaw = (float(v) for v in value)
+    except (TypeError, ValueError):
+        raise InvalidInput(field_name, f"must be three numbers x, y, yaw, got {value!r}") from None
+    if not all(math.isfinite(v) for v in (x, y, yaw)):
+        raise InvalidInput(field_name, "must be finite numbers")
+    if abs(yaw) > 2 * math.pi:
+        raise InvalidInput(f"{field_name}.yaw", f"must be in [-2π, 2π] rad (degrees given?), got {yaw!r}")
+    return x, y, wrap(yaw)
+
+
+@dataclass
+class _Progress:
+    index: int = 0
+
+
+class LiveSession:
+    """Live map + goal + pose + path for one robot (see the module docstring).
+
+    Parameters
+    ----------
+    live_map : the robot's :class:`LiveMap` (the session owns it from now on).
+    robot : the robot profile whose padded footprint is checked.
+    options : planner options; ``allow_unknown`` defaults to True here (Nav2's default: unknown space is
+        traversable, which is what exploring needs).
+    policy : when to replan.
+    clock : seconds on a monotonic scale (the simulation passes its own time).
+    """
+
+    def __init__(self, live_map: LiveMap, robot: RobotProfile, options: PlannerOptions | None = None,
+                 policy: ReplanPolicy | None = None, clock: Callable[[], float] = time.monotonic) -> None:
+        self.map = live_map
+        self.robot = robot
+        self.options = options or PlannerOptions(allow_unknown=True)
+        self.policy = policy or ReplanPolicy()
+        self.clock = clock
+        self.pose: Pose | None = None
+        self.goal: Pose | None = None
+        self.path: PlanResult | None = None
+        self.last_failure: ReplanEvent | None = None
+        self.events: deque[ReplanEvent] = deque(maxlen=EVENTS_KEPT)
+        self.listeners: list[Callable[[ReplanEvent], None]] = []
+        self.arrived = False
+        self._planner: HybridAStar | None = None
+        self._pending: list[CellRect] = []
+        self._progress = _Progress()
+        self._seq = 0
+        self._last_plan_t = -math.inf
+        self._sync_s = 0.0  # refresh time not yet reported by a replan
+        self._sync_mode = ""
+
+    # ------------------------------------------------------------------ inputs
+
+    def set_pose(self, pose: Any, now_s: float | None = None, field: str = "pose") -> ReplanEvent | None:
+        """The robot's current pose (x, y, yaw in the map frame, from odometry); replans on the timer. A bad pose
+        is refused naming ``field``."""
+        self.pose = _pose(pose, field)
+        self._advance()
+        if self.goal is not None and not self.arrived and self.policy.period_s is not None:
+            now = self.clock() if now_s is None else now_s
+            if now - self._last_plan_t >= self.policy.period_s:
+                self._sync_s, self._sync_mode = 0.0, ""
+                return self.replan("timer", time.perf_counter())
+        return None
+
+    def set_goal(self, goal: Any) -> ReplanEvent:
+        """A new goal: plan to it from the current pose at once."""
+        if self.pose is None:
+            raise InvalidInput("pose", "the session has no pose yet: send the robot's pose before its goal")
+        self.goal = _pose(goal, "goal")
+        self.arrived = False
+        self._sync_s, self._sync_mode = 0.0, ""
+        return self.replan("goal", time.perf_counter())
+
+    def observe(self, observation: Observation) -> tuple[MapUpdate, ReplanEvent | None]:
+        """Apply an observation to the live map; replan when it blocks the rest of the path (or when the last
+        plan failed and the map changed). Returns the map update and the replan, if one happened."""
+        t0 = time.perf_counter()
+        self._sync_s, self._sync_mode = 0.0, ""
+        update = self.map.apply(observation)
+        if update.changed is None:
+            return update, None
+        self._pending.extend(update.regions)
+        if len(self._pending) > MAX_PENDING_REGIONS:
+            union = self._pending[0]
+            for rect in self._pending[1:]:
+                union = union.union(rect)
+            self._pending = [union]
+        if self.goal is None or self.pose is None or self.arrived:
+            return update, None
+        if self.path is None:
+            if self.clock() - self._last_plan_t < self.policy.retry_period_s:
+                return update, None
+            return update, self.replan("map_changed", t0)
+        blocked = self.blocked_index()
+        if blocked is None:
+            return update, None
+        xy = (float(self.path.states[blocked, 0]), float(self.path.states[blocked, 1]))
+        return update, self.replan("blocked", t0, blocked_at=xy)
+
+    # ------------------------------------------------------------------ state
+
+    @property
+    def planner(self) -> HybridAStar:
+        """The session's planner, refreshed for every map change so far."""
+        self._sync()
+        assert self._planner is not None
+        return self._planner
+
+    def _sync(self) -> None:
+        """Build the planner, or refresh it for the cells changed since; the time is reported by the next replan."""
+        if self._planner is None:
+            t0 = time.perf_counter()
+            self._planner = capped(HybridAStar(self.map.grid, self.robot, self.options))
+            self._pending = []
+            self._sync_s += time.perf_counter() - t0
+            self._sync_mode = "built"
+            return
+        if not self._pending:
+            return
+        self._planner, took, how = refresh(self._planner, self._pending)
+        self._pending = []
+        self._sync_s += took
+        self._sync_mode = how
+
+    def remaining_states(self) -> np.ndarray:
+        """The path's states (rows of ``planner.result.STATE_FIELDS``) from the robot's progress on."""
+        if self.path is None:
+            return np.zeros((0, 8))
+        return self.path.states[self._progress.index:]
+
+    def blocked_index(self) -> int | None:
+        """Index (into the path's states) of the first state ahead whose footprint meets a blocked cell of the
+        live map, or None while the rest of the path is free."""
+        if self.path is None:
+            return None
+        planner = self.planner
+        rest = self.remaining_states()
+        if len(rest) == 0:
+            return None
+        margins = planner.clearance.footprint_margins(planner.footprint, planner.polygon, rest[:, :3])
+        bad = np.flatnonzero(margins < 0)
+        return None if bad.size == 0 else self._progress.index + int(bad[0])
+
+    def _advance(self) -> None:
+        """Move the progress index to the path state nearest the pose (never backwards by more than 1 m)."""
+        if self.path is None or self.pose is None:
+            return
+        st = self.path.states
+        i0 = self._progress.index
+        s0 = st[i0, 6] - 1.0
+        lo = int(np.searchsorted(st[:, 6], s0))
+        d = np.hypot(st[lo:, 0] - self.pose[0], st[lo:, 1] - self.pose[1])
+        self._progress.index = lo + int(np.argmin(d))
+        if self.goal is not None and math.hypot(self.pose[0] - self.goal[0], self.pose[1] - self.goal[1]) <= \
+                self.policy.arrival_tolerance_m and self._progress.index >= len(st) - 2:
+            self.arrived = True
+
+    # ------------------------------------------------------------------ planning
+
+    def replan(self, reason: str, t_trigger: float | None = None,
+               blocked_at: tuple[float, float] | None = None, time_limit_s: float | None = None) -> ReplanEvent:
+        """Plan from the current pose to the goal now (within ``time_limit_s``, default the policy's); the event
+        goes to every listener."""
+        if reason not in REASONS:
+            raise InvalidInput("reason", f"must be one of {', '.join(REASONS)}, got {reason!r}")
+        if self.pose is None or self.goal is None:
+            raise InvalidInput("goal" if self.goal is None else "pose", "the session needs a pose and a goal to plan")
+        t0 = time.perf_counter() if t_trigger is None else t_trigger
+        self._sync()
+        assert self._planner is not None
+        refresh_s, mode = self._sync_s, self._sync_mode
+        self._sync_s, self._sync_mode = 0.0, ""
+        self._seq += 1
+        self._last_plan_t = self.clock()
+        start = self.pose
+        try:
+            limit = self.policy.time_limit_s if time_limit_s is None else time_limit_s
+            result = self._planner.plan(start, self.goal, Termination(limit))
+        except PlanningError as exc:
+            self.path = None
+            self._progress = _Progress()
+            event = ReplanEvent(self._seq, reason, False, exc.code, exc.msg, time.perf_counter() - t0, refresh_s,
+                                exc.planning_time_s, 0.0, start, blocked_at, mode)
+            self.last_failure = event
+        else:
+            self.path = result
+            self._progress = _Progress()
+            self.last_failure = None
+            event = ReplanEvent(self._seq, reason, True, 0, "", time.perf_counter() - t0, refresh_s,
+                                result.planning_time_s, result.length_m, start, blocked_at, mode)
+        self.events.append(event)
+        for listener in list(self.listeners):
+            listener(event)
+        return event
+
+    def status(self) -> dict[str, Any]:
+        """The session's state as JSON: pose, goal, path length and progress, the last replan, map knowledge."""
+        last = self.events[-1].to_json() if self.events else None
+        state = ("arrived" if self.arrived else "idle" if self.goal is None else
+                 "following" if self.path is not None else
+                 "blocked" if self.last_failure is not None and self.last_failure.error_code in
+                 (StartOccupied.code, GoalOccupied.code) else "no_path")
+        return {
+            "state": state,
+            "pose": None if self.pose is None else dict(zip(("x", "y", "yaw"), self.pose, strict=True)),
+            "goal": None if self.goal is None else dict(zip(("x", "y", "yaw"), self.goal, strict=True)),
+            "path_length_m": None if self.path is None else self.path.length_m,
+            "path_index": self._progress.index,
+            "replans": self._seq,
+            "last_replan": last,
+            "known_fraction": self.map.known_fraction(),
+            "map_updates": self.map.updates,
+        }
+
+
+__all__ = ["REASONS", "LiveSession", "ReplanEvent", "ReplanPolicy"]

@@ -1,0 +1,43 @@
+"""A small subset of the exploration sweep: the worlds are built as described (hidden cells on the known
+route, the start and goal kept clear) and explored with the right outcome."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from lab.explore_bench import format_table, run_world
+from lab.explore_worlds import KEEP_CLEAR_M, build_world, sweep_specs
+from planner.closed_loop.explore import ExploreOptions
+from planner.robot import load_robot
+
+ROBOT = load_robot()
+
+
+def test_sweep_has_at_least_20_worlds_of_every_kind_on_shipped_and_real_maps() -> None:
+    specs = sweep_specs()
+    assert len(specs) >= 20 and len({s.name for s in specs}) == len(specs)
+    assert {s.kind for s in specs} == {"boxes", "aisle", "door"}
+    assert any("/real/" in s.map for s in specs) and any("/real/" not in s.map for s in specs)
+
+
+def test_world_hides_obstacles_on_the_route_only() -> None:
+    spec = next(s for s in sweep_specs() if s.name == "field-around-boxes")
+    world = build_world(spec, ROBOT)
+    added = world.true.data != world.known.data
+    assert world.hidden_cells == int(added.sum()) > 0
+    assert np.all(world.true.data[added] == 100)
+    iy, ix = np.nonzero(added)
+    xy = np.stack([ix, iy], axis=1) * world.known.resolution_m
+    for end in (spec.start, spec.goal):
+        assert np.hypot(*(xy - end[:2]).T).min() > KEEP_CLEAR_M
+
+
+def test_subset_explored_with_the_right_outcome() -> None:
+    options = ExploreOptions(tracker="pursuit")
+    rows = [run_world(s, ROBOT, options) for s in sweep_specs() if s.name in ("field-around-boxes",
+                                                                              "bench-around-door")]
+    assert [r.has_path for r in rows] == [True, False]
+    for r in rows:
+        assert r.correct, (r.spec.name, r.outcome, r.metrics)
+    table = format_table(rows, {"test": [0.001, 0.002]})
+    assert "right outcome in 2/2" in table

@@ -1,0 +1,99 @@
+"""Refreshing a planner for the changed cells plans exactly as a rebuilt one; a session replans when an
+observation blocks its path (checked with the footprint), reports why and how long, and fails typed."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from planner.errors import InvalidInput
+from planner.hybrid_astar.search import HybridAStar, PlannerOptions
+from planner.live import LiveMap, LiveSession, ObstacleLayerParams, PointObservation, ReplanPolicy
+from planner.live.refresh import cap_m, capped, exact_reach_m, refresh
+from planner.maps.clearance import footprint_clearance
+from planner.occupancy import OccupancyGrid
+from planner.robot import load_robot
+
+ROBOT = load_robot("zju-60")
+START, GOAL = (1.5, 5.0, 0.0), (18.5, 5.0, 0.0)
+
+
+def corridor() -> OccupancyGrid:
+    """20 m × 10 m at 0.05 m, walls around."""
+    occ = np.zeros((200, 400), dtype=bool)
+    occ[[0, -1], :] = True
+    occ[:, [0, -1]] = True
+    return OccupancyGrid.from_occupied(occ, 0.05, name="corridor")
+
+
+def wall_points(x: float, y0: float, y1: float) -> np.ndarray:
+    ys = np.arange(y0, y1, 0.02)
+    return np.stack([np.full_like(ys, x), ys, np.full_like(ys, 0.3)], axis=1)
+
+
+def test_refresh_equals_rebuild() -> None:
+    live = LiveMap(corridor(), ObstacleLayerParams.for_robot(ROBOT))
+    opts = PlannerOptions(allow_unknown=True)
+    planner = capped(HybridAStar(live.grid, ROBOT, opts))
+    for x, y0, y1 in ((9.0, 2.0, 8.0), (14.0, 0.5, 4.0)):
+        upd = live.apply(PointObservation(wall_points(x, y0, y1), np.array([x - 5.0, 5.0, 0.3])))
+        assert upd.changed is not None
+        planner, _, how = refresh(planner, list(upd.regions), max_share=1.0)
+        assert how == "patched"
+    rebuilt = HybridAStar(live.snapshot(), ROBOT, opts)
+    assert cap_m(planner) >= exact_reach_m(planner)
+    # the truth, capped: never above it (the search skips ahead by the clearance), exact below the cap
+    assert np.allclose(planner.clearance.clearance, np.minimum(rebuilt.clearance.clearance, cap_m(planner)))
+    assert np.array_equal(planner.clearance.blocked, rebuilt.clearance.blocked)
+    finite = np.isfinite(rebuilt.holonomic_mult)
+    assert np.array_equal(finite, np.isfinite(planner.holonomic_mult))
+    assert np.allclose(planner.holonomic_mult[finite], rebuilt.holonomic_mult[finite])
+    p1, p2 = planner.plan(START, GOAL), rebuilt.plan(START, GOAL)
+    assert p1.length_m == pytest.approx(p2.length_m)
+
+
+def test_blocked_path_is_replanned_from_the_current_pose() -> None:
+    live = LiveMap(corridor(), ObstacleLayerParams.for_robot(ROBOT))
+    session = LiveSession(live, ROBOT, policy=ReplanPolicy(time_limit_s=5.0))
+    heard = []
+    session.listeners.append(heard.append)
+    session.set_pose(START)
+    first = session.set_goal(GOAL)
+    assert first.ok and first.reason == "goal" and first.seq == 1
+    session.set_pose((3.0, 5.0, 0.0))
+    # a wall across the corridor with a gap at the top: the straight path is blocked
+    update, event = session.observe(PointObservation(wall_points(10.0, 0.05, 7.5), np.array([4.0, 5.0, 0.3])))
+    assert update.changed is not None
+    assert event is not None and event.ok and event.reason == "blocked"
+    assert event.blocked_at is not None and abs(event.blocked_at[0] - 10.0) < 0.6
+    assert event.start == (3.0, 5.0, 0.0) and event.latency_s >= event.planning_time_s > 0
+    assert heard == [first, event]
+    assert session.path is not None and session.blocked_index() is None
+    states = session.path.states
+    assert footprint_clearance(live.grid, ROBOT, states[:, :3]) > 0
+    assert states[:, 1].max() > 7.5  # through the gap
+    # an observation away from the path does not replan
+    _, none = session.observe(PointObservation(np.array([[2.0, 1.0, 0.3]]), np.array([3.0, 5.0, 0.3])))
+    assert none is None
+    # closing the gap: no path; the failure is typed and kept
+    _, fail = session.observe(PointObservation(wall_points(10.0, 7.4, 9.96), np.array([4.0, 8.0, 0.3])))
+    assert fail is not None and not fail.ok and fail.error_code == 208
+    assert session.path is None and session.status()["state"] == "no_path"
+
+
+def test_timer_replans_and_goal_needs_a_pose() -> None:
+    now = [0.0]
+    session = LiveSession(LiveMap(corridor()), ROBOT, policy=ReplanPolicy(period_s=1.0), clock=lambda: now[0])
+    with pytest.raises(InvalidInput) as err:
+        session.set_goal(GOAL)
+    assert err.value.field == "pose"
+    session.set_pose(START)
+    session.set_goal(GOAL)
+    now[0] = 0.5
+    assert session.set_pose((2.0, 5.0, 0.0)) is None
+    now[0] = 1.2
+    event = session.set_pose((2.5, 5.0, 0.0))
+    assert event is not None and event.reason == "timer" and event.ok
+    with pytest.raises(InvalidInput) as err:
+        session.set_pose((1.0, 1.0, 100.0))
+    assert err.value.field == "pose.yaw"
