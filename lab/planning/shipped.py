@@ -112,7 +112,7 @@ def bench_ompl(problem: Problem, grid: OccupancyGrid, robot: RobotProfile, plann
 
     def valid(state: Any) -> bool:
         pose = np.array([[state.getX(), state.getY(), state.getYaw()]])
-        return bool(clearance.pose_margin(footprint, pose)[0] >= 0.0)
+        return bool(clearance.circle_margins(footprint, pose)[0] >= 0.0)
 
     setup.setStateValidityChecker(valid)
     info = setup.getSpaceInformation()
@@ -151,7 +151,7 @@ def bench_ompl(problem: Problem, grid: OccupancyGrid, robot: RobotProfile, plann
         path.interpolate(max(2, int(length / 0.02)))
         poses = np.array([[path.getState(i).getX(), path.getState(i).getY(), path.getState(i).getYaw()]
                           for i in range(path.getStateCount())])
-        clearance_m = float(clearance.pose_margin(footprint, poses).min())
+        clearance_m = float(clearance.circle_margins(footprint, poses).min())
         curvature = _max_curvature(poses)
     return BenchRow(
         problem=problem.name, planner=f"ompl-{planner_name}", solvable=problem.solvable,

@@ -41,7 +41,7 @@ from planner.live.live_map import LiveMap
 from planner.live.obstacle_layer import ObstacleLayerParams
 from planner.live.range_sensor import RangeSensor
 from planner.live.session import LiveSession, ReplanEvent, ReplanPolicy
-from planner.maps.clearance import ClearanceMap, footprint_clearance
+from planner.maps.clearance import ClearanceMap, least_footprint_distance
 from planner.occupancy import OccupancyGrid
 from planner.result import STATE_FIELDS
 from planner.robot import RobotProfile
@@ -247,7 +247,7 @@ def explore(known: OccupancyGrid, world: OccupancyGrid, robot: RobotProfile, sta
     if len(snapshots) > MAX_SNAPSHOTS:
         pick = np.unique(np.linspace(0, len(snapshots) - 1, MAX_SNAPSHOTS).round().astype(int))
         snapshots = [snapshots[i] for i in pick]
-    clearance = footprint_clearance(world, robot, tr[:, 1:4]) if len(tr) else 0.0
+    clearance = least_footprint_distance(world, robot, tr[:, 1:4]) if len(tr) else 0.0
     final = events[-1][1] if events else None
     metrics = {
         "reached_goal": outcome == "reached",

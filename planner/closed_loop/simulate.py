@@ -37,7 +37,7 @@ from planner.closed_loop.tracker import (
 )
 from planner.errors import InvalidInput
 from planner.kinematics import SphereState
-from planner.maps.clearance import footprint_clearance
+from planner.maps.clearance import least_footprint_distance
 from planner.occupancy import OccupancyGrid
 from planner.robot import RobotProfile, load_robot
 from planner.termination import Termination
@@ -281,7 +281,7 @@ def _metrics(grid: OccupancyGrid, rig: _Rig, run: _Run, opts: SimulationOptions)
     xt = cross_track_distance(rig.ref.polyline(), tr[:, 1:3])
     est_err = np.hypot(*(es[:, 1:3] - tr[:, 1:3]).T)
     odo_err = np.hypot(*(od[:, 1:3] - tr[:, 1:3]).T)
-    clearance = footprint_clearance(grid, rig.robot, tr[:, 1:4])
+    clearance = least_footprint_distance(grid, rig.robot, tr[:, 1:4])
     final_error = float(math.hypot(tr[-1, 1] - end[0], tr[-1, 2] - end[1]))
     solve_ms = run.solve_ms
     return {

@@ -11,7 +11,7 @@ h = max(holonomic cost-to-go with obstacles, Dubins distance at the minimum turn
 f = g + h·(1 + greed) (eq. 14j). Every few expansions an analytic Dubins shot to the goal is tried,
 turned into roll-held segments whose sideways shifts are compensated, and collision-checked.
 
-The loop runs compiled (:mod:`planner.hybrid_astar.core`) in chunks; between chunks this driver checks the
+The loop runs compiled (:mod:`planner.hybrid_astar.kernels`) in chunks; between chunks this driver checks the
 deadline, the iteration cap and cancellation, and grows the node storage.
 
 Algorithm outline (numbered like the compiled loop):
@@ -45,7 +45,7 @@ from planner.errors import (
     StartOccupied,
     StartOutsideMap,
 )
-from planner.hybrid_astar import core
+from planner.hybrid_astar import kernels
 from planner.hybrid_astar.dubins import dubins_distance
 from planner.hybrid_astar.heuristics import HolonomicHeuristic, auto_downsample, coarse_cost_grid, reeds_shepp_table
 from planner.hybrid_astar.reeds_shepp import sphere_shot
@@ -68,7 +68,7 @@ GOAL_CHECK_BUDGET = 40_000  # expansions that search may take
 GOAL_CHECK_SHARE = 0.15  # ... and at most this share of the time limit
 FORWARD_RETRY_MIN = 20_000  # expansions a forward-only search may always take to find a cheaper path
 FORWARD_RETRY_SHARE = 0.5  # ... tried when the path found rolls more than this share of its length backwards
-CLOSED_SET_BUDGET_MB = 1024  # the closed-set bitset of one plan may not exceed this (≈ 9000² cells at defaults)
+CLOSED_SET_BUDGET_MB = 1024  # the closed-set bitset of one plan may not exceed this (≈ 6300² cells at defaults, tested)
 
 
 @dataclass(frozen=True)
@@ -216,9 +216,9 @@ class _Search:
         self.heur = heur
         self.reverse = reverse
         p = planner._params(goal, reverse)
-        p[core.P_HOX], p[core.P_HOY] = heur.origin_xy
-        p[core.P_HCELL] = heur.cell_m
-        p[core.P_BEST_H] = math.inf
+        p[kernels.P_HOX], p[kernels.P_HOY] = heur.origin_xy
+        p[kernels.P_HCELL] = heur.cell_m
+        p[kernels.P_BEST_H] = math.inf
         self.p = p
         grid = planner.grid
         n_keys = grid.width * grid.height * o.n_yaw_bins * planner.n_roll_bins
@@ -230,51 +230,52 @@ class _Search:
         self.heap_vals = np.empty(cap * 2, dtype=np.int64)
         self.heap_size = np.zeros(1, dtype=np.int64)
         self.counters = np.zeros(8, dtype=np.int64)
-        self.seg_roll, self.seg_curv, self.seg_len = (np.zeros(core.MAX_SHOT_SEGS) for _ in range(3))
+        self.seg_roll, self.seg_curv, self.seg_len = (np.zeros(kernels.MAX_SHOT_SEGS) for _ in range(3))
         self.node_f[0] = (*start, 0.0, 0.0)
         self.node_i[0] = (-1, o.n_rolls // 2, 0)
-        self.counters[core.C_NODES] = 1
-        core.heap_push(self.heap_keys, self.heap_vals, self.heap_size, heur(start[0], start[1]), 0)
+        self.counters[kernels.C_NODES] = 1
+        kernels.heap_push(self.heap_keys, self.heap_vals, self.heap_size, heur(start[0], start[1]), 0)
 
     @property
     def expansions(self) -> int:
-        return int(self.counters[core.C_EXPANSIONS])
+        return int(self.counters[kernels.C_EXPANSIONS])
 
     def reeds_shepp_shot(self, k: int) -> bool:
         """Try a Reeds–Shepp shot from node ``k`` to the goal; on success record it as the result."""
         pl, p = self.planner, self.p
         x, y, yaw, roll = (float(v) for v in self.node_f[k, :4])
-        goal = (float(p[core.P_GX]), float(p[core.P_GY]), float(p[core.P_GYAW]))
+        goal = (float(p[kernels.P_GX]), float(p[kernels.P_GY]), float(p[kernels.P_GYAW]))
         motions = sphere_shot((x, y, yaw, roll), goal, pl.robot.min_turning_radius_m, pl.robot.max_roll_rad,
                               pl.robot.radius_m)
-        if motions is None or len(motions) > core.MAX_SHOT_SEGS:
+        if motions is None or len(motions) > kernels.MAX_SHOT_SEGS:
             return False
         n = len(motions)
         seg = np.array(motions)
         self.seg_roll[:n], self.seg_curv[:n], self.seg_len[:n] = seg[:, 0], seg[:, 1], seg[:, 2]
         # like the compiled shots: keep the preferred clearance where both ends have it
-        keep = max(0.0, min(pl.robot.preferred_clearance_m, pl.pose_margin((x, y, yaw)), pl.pose_margin(goal)))
-        margin = core.shot_margin(pl.clearance.clearance, pl.clearance.blocked, p, pl.footprint.offsets_x,
-                                  pl.footprint.offsets_y, pl._px, pl._py, x, y, yaw, roll, self.seg_roll,
-                                  self.seg_curv, self.seg_len, n, 0.0, keep)
+        keep = max(0.0, min(pl.robot.preferred_clearance_m, pl.footprint_margin((x, y, yaw)),
+                            pl.footprint_margin(goal)))
+        margin = kernels.shot_margin(pl.clearance.clearance, pl.clearance.blocked, p, pl.footprint.offsets_x,
+                                     pl.footprint.offsets_y, pl._px, pl._py, x, y, yaw, roll, self.seg_roll,
+                                     self.seg_curv, self.seg_len, n, 0.0, keep)
         if margin < keep:
             return False
-        self.counters[core.C_RESULT] = k
-        self.counters[core.C_SHOT_SEGS] = n
+        self.counters[kernels.C_RESULT] = k
+        self.counters[kernels.C_SHOT_SEGS] = n
         return True
 
     def step(self, budget: int) -> int:
         """Run up to ``budget`` expansions; returns the compiled loop's status (FULL is handled here)."""
         pl = self.planner
         while True:
-            status = int(core.search_chunk(
+            status = int(kernels.search_chunk(
                 pl.clearance.clearance, pl.clearance.blocked, self.heur.table, pl.rs_table, self.p,
                 pl.footprint.offsets_x, pl.footprint.offsets_y, pl._px, pl._py,
                 pl.rolls, pl.curvatures, pl.roll_bins, pl.n_roll_bins, self.node_f, self.node_i, self.heap_keys,
                 self.heap_vals, self.heap_size, self.closed, self.counters, budget,
                 self.seg_roll, self.seg_curv, self.seg_len,
             ))
-            if status != core.FULL:
+            if status != kernels.FULL:
                 return status
             self.node_f = np.concatenate([self.node_f, np.empty_like(self.node_f)])
             self.node_i = np.concatenate([self.node_i, np.empty_like(self.node_i)])
@@ -369,37 +370,37 @@ class HybridAStar:
             self.resolved_step_m / (0.5 * self.grid.resolution_m) + 1)
         return max(1, min(o.chunk_expansions, int(CHUNK_SAMPLES / per_expansion)))
 
-    def pose_margin(self, pose: Pose) -> float:
+    def footprint_margin(self, pose: Pose) -> float:
         """Footprint margin (m) at a pose: ≥ 0 means free (circles first, the exact polygon where they touch)."""
         return float(self.clearance.footprint_margins(self.footprint, self.polygon, np.array([pose]))[0])
 
     def _params(self, goal: Pose, reverse: bool) -> np.ndarray:
         o = self.options
-        p = np.zeros(core.N_PARAMS)
-        p[core.P_OX], p[core.P_OY] = self.clearance.origin_x, self.clearance.origin_y
-        p[core.P_RES] = self.grid.resolution_m
-        p[core.P_RC] = self.footprint.radius_m
-        p[core.P_RHO] = self.robot.min_turning_radius_m
-        p[core.P_GX], p[core.P_GY], p[core.P_GYAW] = goal
-        p[core.P_TOL_XY], p[core.P_TOL_YAW] = o.goal_tolerance_m, o.goal_tolerance_yaw_rad
-        p[core.P_RADIUS] = self.robot.radius_m
-        p[core.P_STEP] = self.resolved_step_m
-        p[core.P_SPACING] = 0.5 * self.grid.resolution_m
-        p[core.P_NON_STRAIGHT], p[core.P_CHANGE] = o.non_straight_penalty, o.change_penalty
-        p[core.P_REVERSE], p[core.P_SWITCH] = o.reverse_penalty, o.switch_cost_m
-        p[core.P_COST_PENALTY] = o.cost_penalty
+        p = np.zeros(kernels.N_PARAMS)
+        p[kernels.P_OX], p[kernels.P_OY] = self.clearance.origin_x, self.clearance.origin_y
+        p[kernels.P_RES] = self.grid.resolution_m
+        p[kernels.P_RC] = self.footprint.radius_m
+        p[kernels.P_RHO] = self.robot.min_turning_radius_m
+        p[kernels.P_GX], p[kernels.P_GY], p[kernels.P_GYAW] = goal
+        p[kernels.P_TOL_XY], p[kernels.P_TOL_YAW] = o.goal_tolerance_m, o.goal_tolerance_yaw_rad
+        p[kernels.P_RADIUS] = self.robot.radius_m
+        p[kernels.P_STEP] = self.resolved_step_m
+        p[kernels.P_SPACING] = 0.5 * self.grid.resolution_m
+        p[kernels.P_NON_STRAIGHT], p[kernels.P_CHANGE] = o.non_straight_penalty, o.change_penalty
+        p[kernels.P_REVERSE], p[kernels.P_SWITCH] = o.reverse_penalty, o.switch_cost_m
+        p[kernels.P_COST_PENALTY] = o.cost_penalty
         # the proximity cost reaches at least as far as the room the robot would like to keep
-        p[core.P_PROX_RANGE] = max(o.proximity_range_m, self.robot.preferred_clearance_m)
-        p[core.P_PREFERRED] = self.robot.preferred_clearance_m
-        p[core.P_REACH] = float(np.hypot(self.footprint.offsets_x, self.footprint.offsets_y).max())
-        p[core.P_GREED], p[core.P_SHOT_RATIO] = o.greed, o.analytic_ratio_m
-        p[core.P_MAX_ROLL] = self.robot.max_roll_rad
-        p[core.P_USE_DUBINS] = 0.0 if reverse else 1.0
-        p[core.P_USE_RS] = 1.0 if reverse else 0.0
-        p[core.P_RS_CELL] = RS_CELL_M
-        p[core.P_RS_HALF] = self.rs_table.shape[2] // 2
-        p[core.P_ALLOW_REVERSE] = 1.0 if reverse else 0.0
-        p[core.P_N_YAW] = o.n_yaw_bins
+        p[kernels.P_PROX_RANGE] = max(o.proximity_range_m, self.robot.preferred_clearance_m)
+        p[kernels.P_PREFERRED] = self.robot.preferred_clearance_m
+        p[kernels.P_REACH] = float(np.hypot(self.footprint.offsets_x, self.footprint.offsets_y).max())
+        p[kernels.P_GREED], p[kernels.P_SHOT_RATIO] = o.greed, o.analytic_ratio_m
+        p[kernels.P_MAX_ROLL] = self.robot.max_roll_rad
+        p[kernels.P_USE_DUBINS] = 0.0 if reverse else 1.0
+        p[kernels.P_USE_RS] = 1.0 if reverse else 0.0
+        p[kernels.P_RS_CELL] = RS_CELL_M
+        p[kernels.P_RS_HALF] = self.rs_table.shape[2] // 2
+        p[kernels.P_ALLOW_REVERSE] = 1.0 if reverse else 0.0
+        p[kernels.P_N_YAW] = o.n_yaw_bins
         return p
 
     def _check_endpoint(self, pose: Pose, which: str) -> None:
@@ -409,7 +410,7 @@ class HybridAStar:
         if not self.grid.contains(pose[0], pose[1]):
             cls = StartOutsideMap if which == "start" else GoalOutsideMap
             raise cls(f"{which} ({pose[0]:.3f}, {pose[1]:.3f}) is outside the map {self.grid.name!r}")
-        margin = self.pose_margin(pose)
+        margin = self.footprint_margin(pose)
         if margin < 0:
             cls2 = StartOccupied if which == "start" else GoalOccupied
             why = ("the footprint (padded by "
@@ -446,7 +447,7 @@ class HybridAStar:
         t_smooth = time.perf_counter() - t0 - t_search
         extra: dict[str, Any] = {"unsmoothed_length_m": raw_length, "search_time_s": t_search,
                                  "smoothing_time_s": t_smooth}
-        analytic = int(run.counters[core.C_SHOT_SEGS])
+        analytic = int(run.counters[kernels.C_SHOT_SEGS])
         expansions = run.expansions
         if self.reverse and o.prefer_forward:
             fwd, forward = self._forward_alternative(start, goal, heur, o, clock, motions, run.expansions)
@@ -455,7 +456,7 @@ class HybridAStar:
                 extra["forward_alternative_expansions"] = fwd.expansions
             if fwd is not None and forward is not None:
                 motions = forward
-                analytic = int(fwd.counters[core.C_SHOT_SEGS])
+                analytic = int(fwd.counters[kernels.C_SHOT_SEGS])
                 extra["forward_alternative"] = True
         poses = self._densify(start, motions, o.state_spacing_m)
         fine = self._densify(start, motions, self.grid.resolution_m / 4)
@@ -464,7 +465,7 @@ class HybridAStar:
             raise NoValidPathFound("internal check failed: the exact re-check of the final path found a collision")
         # The circles' margin is a lower bound of the polygon's clearance: only poses whose bound could beat
         # the best exact distance found so far are measured exactly.
-        clearance_m = self.clearance.min_footprint_distance(self.polygon, fine[:, :3], margins, CLEARANCE_REACH_M)
+        clearance_m = self.clearance.least_footprint_distance(self.polygon, fine[:, :3], margins, CLEARANCE_REACH_M)
         elapsed = time.perf_counter() - t0
         return PlanResult(
             status="exact",
@@ -492,15 +493,15 @@ class HybridAStar:
         while True:
             # 3b. Reeds–Shepp analytic expansion (reversing robots), from the start and then from the node
             #     closest to the goal by the heuristic whenever that changes, between compiled chunks.
-            best = int(run.counters[core.C_BEST])
+            best = int(run.counters[kernels.C_BEST])
             if run.reverse and best != tried_from:
                 tried_from = best
                 if run.reeds_shepp_shot(best):
                     return
             status = run.step(min(self.chunk_expansions(o), cap - run.expansions))
-            if status == core.FOUND:
+            if status == kernels.FOUND:
                 return
-            if status == core.EXHAUSTED:
+            if status == kernels.EXHAUSTED:
                 raise NoValidPathFound(
                     f"no valid path: the search exhausted every state reachable from the start "
                     f"({run.expansions} expansions)", planning_time_s=time.perf_counter() - t0,
@@ -596,15 +597,15 @@ class HybridAStar:
         flip = 0.0 if self.reverse else math.pi
         back_start = (goal[0], goal[1], wrap(goal[2] + flip))
         back_goal = (start[0], start[1], wrap(start[2] + flip))
-        if self.pose_margin(back_start) < 0:
+        if self.footprint_margin(back_start) < 0:
             return None
         heur = self.holonomic(back_goal[:2], back_start[:2])
         run = _Search(self, back_start, back_goal, heur, o, self.reverse)
         while run.expansions < GOAL_CHECK_BUDGET and not clock.expired():
             status = run.step(min(self.chunk_expansions(o), GOAL_CHECK_BUDGET - run.expansions))
-            if status == core.EXHAUSTED:
+            if status == kernels.EXHAUSTED:
                 return run.expansions
-            if status == core.FOUND:
+            if status == kernels.FOUND:
                 return None
         return None
 
@@ -667,16 +668,16 @@ class HybridAStar:
         self, start: Pose, roll: float, motions: list[tuple[float, float, float]], p: np.ndarray, max_tries: int,
         flip: bool,
     ) -> list[tuple[float, float, float]]:
-        """Replace runs of forward motions by shorter, collision-free rollable Dubins shots (``core.shortcut``);
+        """Replace runs of forward motions by shorter, collision-free rollable Dubins shots (``kernels.shortcut``);
         ``flip`` turns the footprint by π (a mirrored reverse stretch)."""
         knots = self._knots(start, motions, roll)
         n = len(knots)
         out_ij = np.zeros((n, 2), dtype=np.int64)
-        out_roll, out_curv, out_len = (np.zeros((n, core.MAX_SHOT_SEGS)) for _ in range(3))
+        out_roll, out_curv, out_len = (np.zeros((n, kernels.MAX_SHOT_SEGS)) for _ in range(3))
         out_n = np.zeros(n, dtype=np.int64)
-        count = core.shortcut(self.clearance.clearance, self.clearance.blocked, p, *self._footprint_arrays(flip),
-                              np.ascontiguousarray(knots[:, :4]), np.ascontiguousarray(knots[:, 4]), max_tries,
-                              out_ij, out_roll, out_curv, out_len, out_n)
+        count = kernels.shortcut(self.clearance.clearance, self.clearance.blocked, p, *self._footprint_arrays(flip),
+                                 np.ascontiguousarray(knots[:, :4]), np.ascontiguousarray(knots[:, 4]), max_tries,
+                                 out_ij, out_roll, out_curv, out_len, out_n)
         result: list[tuple[float, float, float]] = []
         k = 0
         for c in range(count):
@@ -692,9 +693,9 @@ class HybridAStar:
 
     def _motions(self, run: _Search) -> list[tuple[float, float, float]]:
         """The path as a list of (held roll, curvature, signed arc length) motions, ending upright."""
-        node_f, node_i, result = run.node_f, run.node_i, int(run.counters[core.C_RESULT])
+        node_f, node_i, result = run.node_f, run.node_i, int(run.counters[kernels.C_RESULT])
         seg_roll, seg_curv, seg_len = run.seg_roll, run.seg_curv, run.seg_len
-        n_shot = int(run.counters[core.C_SHOT_SEGS])
+        n_shot = int(run.counters[kernels.C_SHOT_SEGS])
         chain = []
         k = result
         while node_i[k, 0] >= 0:

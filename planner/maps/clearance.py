@@ -14,6 +14,22 @@ Footprint collision in two tiers (paper 001 §4.1, Fig. 6, then exact):
    box are tested exactly against the polygon (a cell square meets the polygon when its centre is inside
    or an edge of the polygon crosses it). Exact to the grid: a gap the footprint fits through is found.
 
+One name per meaning (every wing uses these words, and only these):
+
+* **clearance** (m, per cell): :attr:`ClearanceMap.clearance`, a conservative distance from anywhere in the
+  cell to the nearest blocked cell (see below); what the covering circles are inflated against.
+* **circle margin** (m, per pose): min over the covering circles of clearance − r_c; ≥ 0 proves the pose
+  free, < 0 only says "maybe". Kernel :func:`circle_margin`, many poses :meth:`ClearanceMap.circle_margins`.
+* **footprint hit** (bool, per pose): the exact polygon meets a blocked cell or leaves the map. Kernel
+  :func:`footprint_hits`.
+* **footprint margin** (m, per pose): the two-tier answer — the circle margin where it is ≥ 0, else 0.0
+  where the polygon fits and the (negative) circle margin where it hits; ≥ 0 means free. Kernel
+  :func:`footprint_margin`, many poses :meth:`ClearanceMap.footprint_margins`.
+* **footprint distance** (m, per pose): the exact distance from the polygon to the nearest blocked cell
+  square or the map's edge, capped at a reach; 0 where they meet. Kernel :func:`footprint_distance`, many
+  poses :meth:`ClearanceMap.footprint_distances`; the least over a path :meth:`ClearanceMap.least_footprint_distance`
+  (pruned by circle margins) and :func:`least_footprint_distance` (from a grid and a robot).
+
 Clearance is conservative: the distance transform measures cell centre to cell centre (d), and a point
 anywhere in a cell is at least d − √2·res from any point of the nearest blocked cell, so that is what
 is stored. Cells outside the map count as blocked (the robot must stay on the map).
@@ -145,7 +161,7 @@ class ClearanceMap:
         return _clearance_at(self.clearance, self.origin_x, self.origin_y, self.resolution_m,
                              np.asarray(xs, float).ravel(), np.asarray(ys, float).ravel())
 
-    def pose_margin(self, footprint: CircleFootprint, poses: np.ndarray) -> np.ndarray:
+    def circle_margins(self, footprint: CircleFootprint, poses: np.ndarray) -> np.ndarray:
         """Per pose (rows x, y, yaw): min over circles of clearance − r_c. Free where ≥ 0."""
         poses = np.atleast_2d(np.asarray(poses, float))
         c, s = np.cos(poses[:, 2:3]), np.sin(poses[:, 2:3])
@@ -155,10 +171,10 @@ class ClearanceMap:
         return clear.min(axis=1) - footprint.radius_m
 
     def footprint_margins(self, footprint: CircleFootprint, polygon: np.ndarray, poses: np.ndarray) -> np.ndarray:
-        """Per pose (rows x, y, yaw): the two-tier free-space margin of :func:`pose_margin_exact` (≥ 0 free)."""
+        """Per pose (rows x, y, yaw): the two-tier free-space margin of :func:`footprint_margin` (≥ 0 free)."""
         poses = np.ascontiguousarray(np.atleast_2d(np.asarray(poses, float))[:, :3])
         poly = np.asarray(polygon, float)
-        return _margins_exact(self.clearance, self.blocked, self.origin_x, self.origin_y, self.resolution_m, poses,
+        return _footprint_margins(self.clearance, self.blocked, self.origin_x, self.origin_y, self.resolution_m, poses,
                               footprint.offsets_x, footprint.offsets_y, footprint.radius_m,
                               np.ascontiguousarray(poly[:, 0]), np.ascontiguousarray(poly[:, 1]))
 
@@ -170,7 +186,7 @@ class ClearanceMap:
         return _distances(self.blocked, self.origin_x, self.origin_y, self.resolution_m, poses,
                           np.ascontiguousarray(poly[:, 0]), np.ascontiguousarray(poly[:, 1]), reach_m)
 
-    def min_footprint_distance(self, polygon: np.ndarray, poses: np.ndarray, lower_m: np.ndarray,
+    def least_footprint_distance(self, polygon: np.ndarray, poses: np.ndarray, lower_m: np.ndarray,
                                reach_m: float = 1.0) -> float:
         """The smallest exact footprint distance over ``poses`` (capped at ``reach_m``), given a lower bound
         ``lower_m`` of each pose's distance (e.g. the covering circles' margin): poses are measured in order
@@ -182,7 +198,7 @@ class ClearanceMap:
         for k in np.argsort(lower_m):
             if lower_m[k] >= best:
                 break
-            d = polygon_distance(self.blocked, self.origin_x, self.origin_y, self.resolution_m,
+            d = footprint_distance(self.blocked, self.origin_x, self.origin_y, self.resolution_m,
                                  poses[k, 0], poses[k, 1], poses[k, 2], px, py, best)
             best = min(best, d)
             if best <= 0.0:
@@ -262,7 +278,7 @@ def _placed(x: float, y: float, yaw: float, px: np.ndarray, py: np.ndarray) -> t
 
 
 @njit(cache=True)
-def polygon_hits(
+def footprint_hits(
     blocked: np.ndarray, ox: float, oy: float, res: float, x: float, y: float, yaw: float,
     px: np.ndarray, py: np.ndarray,
 ) -> bool:
@@ -297,7 +313,7 @@ def polygon_hits(
 
 
 @njit(cache=True)
-def pose_margin_exact(
+def footprint_margin(
     clear: np.ndarray, blocked: np.ndarray, ox: float, oy: float, res: float, x: float, y: float, yaw: float,
     offx: np.ndarray, offy: np.ndarray, r_c: float, px: np.ndarray, py: np.ndarray,
 ) -> float:
@@ -306,22 +322,22 @@ def pose_margin_exact(
     The covering circles' margin when they are clear of every obstacle (a lower bound of the polygon's
     clearance); otherwise the polygon decides: 0.0 when it fits, the (negative) circle margin when it hits.
     """
-    m = pose_margin_nb(clear, ox, oy, res, x, y, yaw, offx, offy, r_c)
+    m = circle_margin(clear, ox, oy, res, x, y, yaw, offx, offy, r_c)
     if m >= 0.0:
         return m
-    if polygon_hits(blocked, ox, oy, res, x, y, yaw, px, py):
+    if footprint_hits(blocked, ox, oy, res, x, y, yaw, px, py):
         return m if m > -1e9 else -1e9
     return 0.0
 
 
 @njit(cache=True)
-def _margins_exact(
+def _footprint_margins(
     clear: np.ndarray, blocked: np.ndarray, ox: float, oy: float, res: float, poses: np.ndarray,
     offx: np.ndarray, offy: np.ndarray, r_c: float, px: np.ndarray, py: np.ndarray,
 ) -> np.ndarray:
     out = np.empty(poses.shape[0])
     for k in range(poses.shape[0]):
-        out[k] = pose_margin_exact(clear, blocked, ox, oy, res, poses[k, 0], poses[k, 1], poses[k, 2],
+        out[k] = footprint_margin(clear, blocked, ox, oy, res, poses[k, 0], poses[k, 1], poses[k, 2],
                                    offx, offy, r_c, px, py)
     return out
 
@@ -335,7 +351,7 @@ def _point_segment(x: float, y: float, ax: float, ay: float, bx: float, by: floa
 
 
 @njit(cache=True)
-def polygon_distance(
+def footprint_distance(
     blocked: np.ndarray, ox: float, oy: float, res: float, x: float, y: float, yaw: float,
     px: np.ndarray, py: np.ndarray, reach_m: float,
 ) -> float:
@@ -343,7 +359,7 @@ def polygon_distance(
     map's edge, capped at ``reach_m``; 0 when they meet. Between two disjoint polygons the closest pair is a
     vertex of one and an edge of the other, so polygon vertices are measured to each cell square and cell
     corners to each polygon edge."""
-    if polygon_hits(blocked, ox, oy, res, x, y, yaw, px, py):
+    if footprint_hits(blocked, ox, oy, res, x, y, yaw, px, py):
         return 0.0
     wx, wy = _placed(x, y, yaw, px, py)
     n = px.size
@@ -384,7 +400,7 @@ def _distances(blocked: np.ndarray, ox: float, oy: float, res: float, poses: np.
                px: np.ndarray, py: np.ndarray, reach_m: float) -> np.ndarray:
     out = np.empty(poses.shape[0])
     for k in range(poses.shape[0]):
-        out[k] = polygon_distance(blocked, ox, oy, res, poses[k, 0], poses[k, 1], poses[k, 2], px, py, reach_m)
+        out[k] = footprint_distance(blocked, ox, oy, res, poses[k, 0], poses[k, 1], poses[k, 2], px, py, reach_m)
     return out
 
 
@@ -400,7 +416,7 @@ def _clearance_at(clear: np.ndarray, ox: float, oy: float, res: float, xs: np.nd
 
 
 @njit(cache=True)
-def pose_margin_nb(
+def circle_margin(
     clear: np.ndarray, ox: float, oy: float, res: float, x: float, y: float, yaw: float,
     offx: np.ndarray, offy: np.ndarray, r_c: float,
 ) -> float:
@@ -422,7 +438,8 @@ def pose_margin_nb(
     return best
 
 
-def footprint_clearance(grid: OccupancyGrid, robot: RobotProfile, poses: np.ndarray, reach_m: float = 1.0) -> float:
+def least_footprint_distance(grid: OccupancyGrid, robot: RobotProfile, poses: np.ndarray,
+                             reach_m: float = 1.0) -> float:
     """Smallest exact distance (m) between the robot's padded footprint polygon at any of ``poses`` (m, 3: x, y,
     yaw) and a blocked cell (occupied or unknown) of the raw map or the map's edge; 0 when they meet; capped
     at ``reach_m``."""

@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 from fastapi.testclient import TestClient
 
-from planner.maps.clearance import footprint_clearance
+from planner.maps.clearance import least_footprint_distance
 from planner.robot import load_robot
 from service.http import create_app
 from service.sessions import SessionLimits, SessionStore
@@ -64,7 +64,7 @@ def test_observations_that_block_the_path_give_a_new_path(client: TestClient, se
     for x, y, _ in gap_wall():
         data[int(y / 0.1), int(x / 0.1)] = 100
     blocked_hall = type(live)(data, live.resolution_m, live.origin)
-    assert footprint_clearance(blocked_hall, load_robot(), xy) > 0  # clear of what was observed
+    assert least_footprint_distance(blocked_hall, load_robot(), xy) > 0  # clear of what was observed
     assert xy[np.abs(xy[:, 0] - 5.15) < 0.3, 1].min() > 6.2  # through what is left of the gap
     status = client.get(f"/v1/sessions/{sid}").json()["status"]
     assert status["replans"] == 2 and status["last_replan"]["reason"] == "blocked"

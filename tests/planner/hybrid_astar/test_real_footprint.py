@@ -38,7 +38,7 @@ def test_a_corridor_the_footprint_fits_with_two_centimetres_to_spare_is_found():
     result = planner.plan(start, goal)
     assert check_path(grid, ROBOT, result.states, start, goal) == []
     # the covering circle alone would have refused the corridor: the polygon decided
-    assert planner.clearance.pose_margin(planner.footprint, result.states[:, :3]).min() < 0
+    assert planner.clearance.circle_margins(planner.footprint, result.states[:, :3]).min() < 0
     assert 0.0 < result.min_clearance_m <= 0.03
     assert result.min_clearance_m == pytest.approx(footprint_distance(grid, ROBOT, result.states), abs=0.02)
 
@@ -51,7 +51,7 @@ def test_free_start_next_to_a_wall_is_not_refused():
     start = (3.0, y, 0.0)
     assert not footprint_hits(grid, ROBOT, *start)
     planner = HybridAStar(grid, ROBOT)
-    assert planner.pose_margin(start) >= 0
+    assert planner.footprint_margin(start) >= 0
     result = planner.plan(start, (3.0, 2.0, math.pi))
     assert check_path(grid, ROBOT, result.states, start, (3.0, 2.0, math.pi)) == []
     with pytest.raises(StartOccupied):
@@ -99,7 +99,7 @@ def test_a_dead_end_goal_is_reported_long_before_the_time_limit():
     grid = OccupancyGrid.from_occupied(occ, 0.05)
     start, goal = (15.0, 3.0, 0.0), (8.5, 7.95, 0.0)  # facing out of the slot: it would have to turn inside
     planner = HybridAStar(grid, ROBOT, PlannerOptions(allow_reverse=False))
-    assert planner.pose_margin(goal) >= 0
+    assert planner.footprint_margin(goal) >= 0
     with pytest.raises(NoValidPathFound) as info:
         planner.plan(start, goal, Termination(120))
     assert "dead end" in str(info.value)

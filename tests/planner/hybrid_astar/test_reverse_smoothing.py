@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from planner.hybrid_astar import core
+from planner.hybrid_astar import kernels
 from planner.hybrid_astar.search import HybridAStar, PlannerOptions
 from planner.kinematics import child_pose
 from planner.maps.load import load_map
@@ -76,9 +76,10 @@ def test_the_mirrored_footprint_is_the_footprint_turned_round(garage) -> None:
     clear, blocked = planner.clearance.clearance, planner.clearance.blocked
     for _ in range(300):
         x, y, yaw = rng.uniform(1, 39), rng.uniform(1, 29), rng.uniform(-math.pi, math.pi)
-        own = core._motion_margin(clear, blocked, p, *planner._footprint_arrays(), x, y, yaw, 0.0, 0.0, 0.0, math.inf)
-        turned = core._motion_margin(clear, blocked, p, *planner._footprint_arrays(flip=True), x, y, yaw + math.pi,
-                                     0.0, 0.0, 0.0, math.inf)
+        own = kernels._motion_margin(clear, blocked, p, *planner._footprint_arrays(), x, y, yaw, 0.0, 0.0, 0.0,
+                                     math.inf)
+        turned = kernels._motion_margin(clear, blocked, p, *planner._footprint_arrays(flip=True), x, y, yaw + math.pi,
+                                        0.0, 0.0, 0.0, math.inf)
         assert turned == pytest.approx(own, abs=1e-9)
 
 

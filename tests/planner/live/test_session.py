@@ -10,7 +10,7 @@ from planner.errors import InvalidInput
 from planner.hybrid_astar.search import HybridAStar, PlannerOptions
 from planner.live import LiveMap, LiveSession, ObstacleLayerParams, PointObservation, ReplanPolicy
 from planner.live.refresh import cap_m, capped, exact_reach_m, refresh
-from planner.maps.clearance import footprint_clearance
+from planner.maps.clearance import least_footprint_distance
 from planner.occupancy import OccupancyGrid
 from planner.robot import load_robot
 
@@ -70,7 +70,7 @@ def test_blocked_path_is_replanned_from_the_current_pose() -> None:
     assert heard == [first, event]
     assert session.path is not None and session.blocked_index() is None
     states = session.path.states
-    assert footprint_clearance(live.grid, ROBOT, states[:, :3]) > 0
+    assert least_footprint_distance(live.grid, ROBOT, states[:, :3]) > 0
     assert states[:, 1].max() > 7.5  # through the gap
     # an observation away from the path does not replan
     _, none = session.observe(PointObservation(np.array([[2.0, 1.0, 0.3]]), np.array([3.0, 5.0, 0.3])))

@@ -12,7 +12,7 @@ from planner.maps.clearance import (
     CircleFootprint,
     ClearanceMap,
     boundary_cell_centres,
-    footprint_clearance,
+    least_footprint_distance,
 )
 from planner.occupancy import OccupancyGrid
 from planner.robot import RobotProfile, load_robot, profile_from_dict
@@ -73,7 +73,7 @@ def test_two_tier_check_agrees_with_an_independent_polygon_test(robot: RobotProf
     clear = ClearanceMap(grid)
     poses = np.column_stack([rng.uniform(0, 6, 1500), rng.uniform(0, 6, 1500), rng.uniform(-3.2, 3.2, 1500)])
     margins = clear.footprint_margins(fp, robot.footprint_polygon, poses)
-    circles = clear.pose_margin(fp, poses)
+    circles = clear.circle_margins(fp, poses)
     assert np.all(margins[circles >= 0] == circles[circles >= 0])  # the cheap tier answers where it can
     hits = np.array([footprint_hits(grid, robot, x, y, yaw) for x, y, yaw in poses])
     assert 50 < hits.sum() < len(poses) - 50
@@ -92,18 +92,18 @@ def test_exact_footprint_distance_agrees_with_brute_force():
     for pose, d in zip(poses, fast, strict=True):
         assert d == pytest.approx(footprint_distance(grid, robot, pose[None], reach_m=1.0), abs=1e-9)
     fp = CircleFootprint.for_robot(robot)
-    lower = clear.pose_margin(fp, poses)
+    lower = clear.circle_margins(fp, poses)
     assert np.all(lower <= fast + 1e-9)  # the circles' margin is a lower bound of the true distance
-    assert clear.min_footprint_distance(robot.footprint_polygon, poses, lower) == pytest.approx(fast.min(), abs=1e-12)
+    assert clear.least_footprint_distance(robot.footprint_polygon, poses, lower) == pytest.approx(fast.min(), abs=1e-12)
 
 
 def test_leaving_the_map_is_a_collision():
     grid = OccupancyGrid.from_occupied(np.zeros((40, 40), bool), 0.1)
     fp = CircleFootprint.for_robot(load_robot())
     clear = ClearanceMap(grid)
-    assert clear.pose_margin(fp, np.array([[2.0, 2.0, 0.0]]))[0] > 0
-    assert clear.pose_margin(fp, np.array([[0.2, 2.0, 0.0]]))[0] < 0
-    assert clear.pose_margin(fp, np.array([[-1.0, 2.0, math.pi]]))[0] == -math.inf
+    assert clear.circle_margins(fp, np.array([[2.0, 2.0, 0.0]]))[0] > 0
+    assert clear.circle_margins(fp, np.array([[0.2, 2.0, 0.0]]))[0] < 0
+    assert clear.circle_margins(fp, np.array([[-1.0, 2.0, math.pi]]))[0] == -math.inf
 
 
 def test_footprint_clearance_against_a_wall() -> None:
@@ -112,14 +112,14 @@ def test_footprint_clearance_against_a_wall() -> None:
     occ[:, 60:] = True  # wall from x = 3.0 m
     grid = OccupancyGrid.from_occupied(occ, 0.05)
     half_l, half_w = ROBOT.footprint_length_m / 2, ROBOT.footprint_width_m / 2
-    assert footprint_clearance(grid, ROBOT, np.array([[2.0, 2.0, 0.0]])) == pytest.approx(1.0 - half_l)
-    assert footprint_clearance(grid, ROBOT, np.array([[2.0, 2.0, math.pi / 2]])) == pytest.approx(1.0 - half_w)
+    assert least_footprint_distance(grid, ROBOT, np.array([[2.0, 2.0, 0.0]])) == pytest.approx(1.0 - half_l)
+    assert least_footprint_distance(grid, ROBOT, np.array([[2.0, 2.0, math.pi / 2]])) == pytest.approx(1.0 - half_w)
     diag = math.hypot(half_l, half_w)
     yaw = math.atan2(half_w, half_l)  # a corner points straight at the wall
-    assert footprint_clearance(grid, ROBOT, np.array([[2.0, 2.0, -yaw]])) == pytest.approx(1.0 - diag)
-    assert footprint_clearance(grid, ROBOT, np.array([[2.8, 2.0, 0.0]])) == 0.0
+    assert least_footprint_distance(grid, ROBOT, np.array([[2.0, 2.0, -yaw]])) == pytest.approx(1.0 - diag)
+    assert least_footprint_distance(grid, ROBOT, np.array([[2.8, 2.0, 0.0]])) == 0.0
     # the map's edge counts as an obstacle (y = 0 is the bottom edge)
-    assert footprint_clearance(grid, ROBOT, np.array([[1.0, 0.5, 0.0]])) == pytest.approx(0.5 - half_w)
+    assert least_footprint_distance(grid, ROBOT, np.array([[1.0, 0.5, 0.0]])) == pytest.approx(0.5 - half_w)
 
 
 def _boxes(boxes: list[tuple[float, float, float, float]]) -> OccupancyGrid:

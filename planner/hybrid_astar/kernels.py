@@ -16,7 +16,7 @@ from numba import njit
 from planner.hybrid_astar.dubins import WORD_TURNS, dubins_distance, dubins_shortest
 from planner.hybrid_astar.heap import heap_pop, heap_push
 from planner.kinematics import arc_step, roll_shift, wrap
-from planner.maps.clearance import pose_margin_exact
+from planner.maps.clearance import footprint_margin
 
 RUNNING, FOUND, EXHAUSTED, FULL = 0, 1, 2, 3
 
@@ -51,7 +51,7 @@ def _motion_margin(
     while t < shift:
         t = min(shift, t + advance)
         xs, ys = roll_shift(x, y, yaw, radius, math.copysign(t / radius, d_roll))
-        m = pose_margin_exact(clear, blocked, ox, oy, res, xs, ys, yaw, offx, offy, r_c, px, py)
+        m = footprint_margin(clear, blocked, ox, oy, res, xs, ys, yaw, offx, offy, r_c, px, py)
         if m < worst:
             worst = m
             if worst < 0.0:
@@ -65,7 +65,7 @@ def _motion_margin(
     while t < length:
         t = min(length, t + advance)
         xa, ya, ya2 = arc_step(x1, y1, yaw, curv, math.copysign(t, s))
-        m = pose_margin_exact(clear, blocked, ox, oy, res, xa, ya, ya2, offx, offy, r_c, px, py)
+        m = footprint_margin(clear, blocked, ox, oy, res, xa, ya, ya2, offx, offy, r_c, px, py)
         if m < worst:
             worst = m
             if worst < 0.0:
