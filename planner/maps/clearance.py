@@ -39,10 +39,11 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import lru_cache
 
 import numpy as np
 from numba import njit
-from scipy.ndimage import distance_transform_edt
+from scipy import ndimage
 
 from planner.occupancy import OccupancyGrid
 from planner.robot import RobotProfile
@@ -96,8 +97,10 @@ class CircleFootprint:
 
     @classmethod
     def for_robot(cls, robot: RobotProfile, max_circles: int = 3) -> CircleFootprint:
-        """The covering of the robot's padded footprint polygon (see :meth:`for_polygon`)."""
-        return cls.for_polygon(robot.footprint_polygon, max_circles)
+        """The covering of the robot's padded footprint polygon (see :meth:`for_polygon`), computed once per
+        polygon in a process."""
+        poly = np.asarray(robot.footprint_polygon, float)
+        return _covering_of(tuple(map(tuple, poly.tolist())), max_circles)
 
     def excess(self, polygon: np.ndarray) -> float:
         """How far (m) the circles' union reaches beyond the polygon, in the worst of 360 directions."""
@@ -113,6 +116,11 @@ class CircleFootprint:
         )
 
 
+@lru_cache(maxsize=32)
+def _covering_of(polygon: tuple[tuple[float, ...], ...], max_circles: int) -> CircleFootprint:
+    return CircleFootprint.for_polygon(np.array(polygon, float), max_circles)
+
+
 def inscribed_radius(polygon: np.ndarray) -> float:
     """Radius (m) of the largest disc centred on the robot's origin that fits inside the polygon."""
     poly = np.asarray(polygon, float)
@@ -124,9 +132,71 @@ def inscribed_radius(polygon: np.ndarray) -> float:
 
 def centre_distance(grid: OccupancyGrid, allow_unknown: bool = False) -> np.ndarray:
     """Distance (m, shape (height, width)) from each cell centre to the nearest blocked cell centre, the
-    ring of cells just outside the map counting as blocked (Euclidean distance transform)."""
-    padded = np.pad(grid.blocked(allow_unknown), 1, constant_values=True)
-    return np.asarray(distance_transform_edt(~padded)[1:-1, 1:-1] * grid.resolution_m, dtype=np.float64)
+    ring of cells just outside the map counting as blocked (exact Euclidean distance transform,
+    :func:`edt_cells`)."""
+    return edt_cells(grid.blocked(allow_unknown)) * grid.resolution_m
+
+
+@njit(cache=True)
+def edt_cells(blocked: np.ndarray) -> np.ndarray:
+    """Exact Euclidean distance (in cells, float64, shape of ``blocked``) from each cell centre to the nearest
+    blocked cell centre, the ring of cells just outside the grid counting as blocked.
+
+    Felzenszwalb & Huttenlocher's separable transform (2012): per column the distance to the nearest blocked
+    cell, then per row the lower envelope of the parabolas (x − q)² + g(q)², with the outside ring as two more
+    sites at q = −1 and q = width. Equals :func:`scipy.ndimage.distance_transform_edt` of the padded grid
+    (tested) in a fraction of its time.
+    """
+    h, w = blocked.shape
+    big = float(h + w + 2)
+    g = np.empty((h, w))
+    # columns: distance to the nearest blocked cell above or below (or the outside ring), swept row by row
+    for x in range(w):
+        g[0, x] = 0.0 if blocked[0, x] else 1.0
+    for y in range(1, h):
+        for x in range(w):
+            g[y, x] = 0.0 if blocked[y, x] else g[y - 1, x] + 1.0
+    for x in range(w):
+        g[h - 1, x] = min(g[h - 1, x], 1.0)
+    for y in range(h - 2, -1, -1):
+        for x in range(w):
+            if g[y + 1, x] + 1.0 < g[y, x]:
+                g[y, x] = g[y + 1, x] + 1.0
+    out = np.empty((h, w))
+    n = w + 2
+    f = np.empty(n)
+    v = np.empty(n, dtype=np.int64)
+    z = np.empty(n + 1)
+    for y in range(h):
+        f[0] = 0.0  # the ring's cell at q = −1 (site index 0)
+        for x in range(w):
+            gx = g[y, x]
+            f[x + 1] = gx * gx if gx < big else big * big
+        f[n - 1] = 0.0  # the ring's cell at q = width
+        k = 0
+        v[0] = 0
+        z[0] = -math.inf
+        z[1] = math.inf
+        for q in range(1, n):
+            while True:
+                r = v[k]
+                s = ((f[q] + q * q) - (f[r] + r * r)) / (2.0 * (q - r))
+                if s <= z[k]:
+                    k -= 1
+                    continue
+                break
+            k += 1
+            v[k] = q
+            z[k] = s
+            z[k + 1] = math.inf
+        k = 0
+        for x in range(w):
+            q = x + 1
+            while z[k + 1] < q:
+                k += 1
+            r = v[k]
+            out[y, x] = math.sqrt((q - r) * (q - r) + f[r])
+    return out
 
 
 def boundary_cell_centres(grid: OccupancyGrid, allow_unknown: bool = False, edge_blocked: bool = False) -> np.ndarray:
@@ -155,6 +225,21 @@ class ClearanceMap:
         self.origin_x = float(grid.origin[0])
         self.origin_y = float(grid.origin[1])
         self.resolution_m = float(grid.resolution_m)
+
+    def disc_components(self, inradius_m: float) -> np.ndarray:
+        """Labels (height, width; int32) of the 8-connected pieces of cells that may hold the centre of a free
+        disc of radius ``inradius_m`` (the footprint's inscribed disc); 0 = no such centre in the cell.
+
+        A cell is kept when its centre is at least ``inradius_m − res·√2/2`` from every blocked cell centre
+        (and from the ring outside the map): a superset of the cells containing a position where the disc —
+        and so the footprint — is free, and any continuous motion passes through 8-adjacent kept cells. So
+        start and goal in different pieces proves that no motion joins them (a flood fill, as Nav2's
+        planners refuse a goal in another connected region).
+        """
+        centre = self.clearance + math.sqrt(2.0) * self.resolution_m  # back to centre-to-centre distances
+        kept = centre >= inradius_m - self.resolution_m * math.sqrt(0.5) - 1e-9
+        labels, _ = ndimage.label(kept, structure=np.ones((3, 3), dtype=bool))
+        return np.asarray(labels, dtype=np.int32)
 
     def at(self, xs: np.ndarray, ys: np.ndarray) -> np.ndarray:
         """Clearance at world points (vectorised); −inf outside the map."""

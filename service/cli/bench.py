@@ -47,7 +47,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     real = parser.add_argument_group("--suite real")
     real.add_argument("--real-maps", default=None,
                       help="comma-separated map names in maps/real or YAML paths (default: every map in maps/real)")
-    real.add_argument("--per-map", type=int, default=6, help="problems drawn per map (default 6)")
+    real.add_argument("--per-map", type=int, default=10, help="problems drawn per map (default 10)")
     real.add_argument("--seed", type=int, default=0, help="seed of the problem draw (default 0)")
     real.add_argument("--time-limit", type=positive_float, default=None,
                       help="time limit per planner and problem, s (default: 10 s on maps of ≥ 1 M cells, else 5 s)")

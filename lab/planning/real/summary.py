@@ -33,7 +33,11 @@ class MapSummary:
     goals sphereplan called "in collision" although the padded polygon is free there (all drawn poses are);
     ``unsolved_*``: problems nobody solved and sphereplan did not refuse (``unsolved_time_p50_s``: how long
     sphereplan took to give up on them: timeout, no path or another planning error); ``time_*``: sphereplan
-    on the problems it solved; ``both_*``: medians over the problems both sphereplan and the reference solved;
+    on the problems it solved; ``both_*``: medians over the problems both sphereplan and the reference solved
+    (``both_ratio_*``: sphereplan's time ÷ the faster reference's first-solution time, per problem, median and
+    p90); ``length_ratio_*``: length ÷ the reference's best (final) length; ``first_ratio_median``: length ÷ the
+    shortest BIT* first solution, ``longer_than_first``: the share of problems where sphereplan's path is longer
+    than that; ``expansions_per_s``: sphereplan's expansions ÷ its time, summed over its solved problems;
     ``clearance_*``: medians over sphereplan's solved problems of the path's least clearance, true (polygon)
     and as reported.
     """
@@ -53,13 +57,19 @@ class MapSummary:
     timeouts: int
     bad_paths: int
     time_p50_s: float
-    time_p95_s: float
+    time_p90_s: float
+    time_max_s: float
     both_sphereplan_p50_s: float
     both_bit_first_p50_s: float
+    both_ratio_median: float
+    both_ratio_p90: float
     unsolved: int
     unsolved_time_p50_s: float
     length_ratio_median: float
     length_ratio_max: float
+    first_ratio_median: float
+    longer_than_first: float
+    expansions_per_s: float
     clearance_median_m: float
     reported_clearance_median_m: float
 
@@ -68,8 +78,8 @@ def _median(values: Sequence[float]) -> float:
     return float(statistics.median(values)) if values else math.nan
 
 
-def _p95(values: Sequence[float]) -> float:
-    return float(np.percentile(values, 95)) if values else math.nan
+def _p90(values: Sequence[float]) -> float:
+    return float(np.percentile(values, 90)) if values else math.nan
 
 
 def summarise(records: Sequence[RunRecord], checkers: dict[str, FootprintReferee], reverse_allowed: bool,
@@ -104,7 +114,7 @@ def _summary(name: str, records: list[RunRecord], checker: FootprintReferee | No
         pose = (r.start_x, r.start_y, r.start_yaw) if r.status == "start_refused" else (r.goal_x, r.goal_y, r.goal_yaw)
         if check is None or not check.collides(*pose):
             refused_free += 1
-    both_ours, both_bit, unsolved_times = [], [], []
+    both_ours, both_bit, both_ratio, first_ratio, unsolved_times = [], [], [], [], []
     missed = 0
     for g in by_problem.values():
         mine = g.get(SPHEREPLAN)
@@ -114,6 +124,8 @@ def _summary(name: str, records: list[RunRecord], checker: FootprintReferee | No
         if mine is not None and refs and mine.solved:
             both_ours.append(mine.time_s)
             both_bit.append(min(r.time_s for r in refs))
+            both_ratio.append(mine.time_s / max(both_bit[-1], 1e-6))
+            first_ratio.append(mine.length_m / min(r.first_length_m for r in refs))
         anyone = (mine is not None and mine.solved) or bool(ref_solved(g, set(REFERENCE_SPACES)))
         if not anyone and mine is not None and mine.status in ("timeout", "no_path", "error"):
             unsolved_times.append(mine.time_s)
@@ -129,10 +141,17 @@ def _summary(name: str, records: list[RunRecord], checker: FootprintReferee | No
         sphereplan=len(solved), missed=missed, refused_free=refused_free,
         timeouts=sum(1 for r in ours if r.status == "timeout"),
         bad_paths=sum(1 for r in ours if r.status == "solved" and not r.valid),
-        time_p50_s=_median([r.time_s for r in solved]), time_p95_s=_p95([r.time_s for r in solved]),
+        time_p50_s=_median([r.time_s for r in solved]), time_p90_s=_p90([r.time_s for r in solved]),
+        time_max_s=max((r.time_s for r in solved), default=math.nan),
         both_sphereplan_p50_s=_median(both_ours), both_bit_first_p50_s=_median(both_bit),
+        both_ratio_median=_median(both_ratio), both_ratio_p90=_p90(both_ratio),
         unsolved=len(unsolved_times), unsolved_time_p50_s=_median(unsolved_times),
         length_ratio_median=_median(ratios), length_ratio_max=max(ratios) if ratios else math.nan,
+        first_ratio_median=_median(first_ratio),
+        longer_than_first=(sum(1 for v in first_ratio if v > 1.0 + 1e-9) / len(first_ratio)) if first_ratio
+        else math.nan,
+        expansions_per_s=(sum(r.expansions for r in solved if r.expansions > 0)
+                          / max(sum(r.time_s for r in solved if r.expansions > 0), 1e-9)) if solved else math.nan,
         clearance_median_m=_median([r.min_clearance_m for r in solved]),
         reported_clearance_median_m=_median([r.reported_clearance_m for r in solved]),
     )
@@ -140,18 +159,23 @@ def _summary(name: str, records: list[RunRecord], checker: FootprintReferee | No
 
 TABLE_COLUMNS = (
     ("map", "map"), ("cells", "cells"), ("limit s", "time limit given to each planner"),
-    ("setup s", "building sphereplan's planner for the map (once, not in the plan times)"),
+    ("setup s", "preprocessing: building sphereplan's planner for the map (once, not in the plan times)"),
     ("n", "problems"), ("disc", "proven unreachable (disconnected)"),
     ("BIT*D", "solved by BIT* on Dubins"), ("BIT*RS", "solved by BIT* on Reeds–Shepp"),
     ("BIT*", "solved by BIT* (either)"), ("sp", "solved by sphereplan"),
     ("missed", "solved by the reference for sphereplan's motions, not by sphereplan"),
     ("refused", "free start/goal refused as in collision"), ("t/o", "sphereplan timeouts"),
     ("bad", "sphereplan paths the exact polygon check rejects"),
-    ("p50 s", "sphereplan time p50, solved"), ("p95 s", "sphereplan time p95, solved"),
+    ("p50 s", "sphereplan time p50, solved"), ("p90 s", "sphereplan time p90, solved"),
+    ("max s", "sphereplan time max, solved"),
     ("both sp", "sphereplan p50 where both solved"), ("both BIT*", "BIT* first-solution p50 where both solved"),
+    ("x med", "per problem: sphereplan time ÷ BIT* first-solution time, median (both solved)"),
+    ("x p90", "the same ratio, p90"),
     ("unsolved", "problems nobody solved (sphereplan timed out or found none)"),
     ("give-up s", "sphereplan p50 time to give up on them"),
-    ("len med", "length ÷ reference, median"), ("len max", "length ÷ reference, max"),
+    ("len med", "length ÷ reference best, median"), ("len max", "length ÷ reference best, max"),
+    ("÷first", "length ÷ BIT*'s first solution, median"), (">first", "share longer than BIT*'s first solution"),
+    ("exp/s", "sphereplan expansions per second of planning time (solved problems)"),
     ("clear m", "sphereplan's true footprint clearance, median"),
     ("rep m", "sphereplan's reported min_clearance_m, median"),
 )
@@ -168,9 +192,11 @@ def format_real_table(summaries: Sequence[MapSummary]) -> str:
         rows.append([
             s.map, s.cells, _fmt(s.time_limit_s, 0), _fmt(s.setup_s, 2), str(s.problems), str(s.disconnected),
             str(s.bit_dubins), str(s.bit_reeds_shepp), str(s.bit_solved), str(s.sphereplan), str(s.missed),
-            str(s.refused_free), str(s.timeouts), str(s.bad_paths), _fmt(s.time_p50_s, 3), _fmt(s.time_p95_s, 3),
-            _fmt(s.both_sphereplan_p50_s, 3), _fmt(s.both_bit_first_p50_s, 3), str(s.unsolved),
+            str(s.refused_free), str(s.timeouts), str(s.bad_paths), _fmt(s.time_p50_s, 3), _fmt(s.time_p90_s, 3),
+            _fmt(s.time_max_s, 3), _fmt(s.both_sphereplan_p50_s, 3), _fmt(s.both_bit_first_p50_s, 3),
+            _fmt(s.both_ratio_median, 2), _fmt(s.both_ratio_p90, 2), str(s.unsolved),
             _fmt(s.unsolved_time_p50_s, 3), _fmt(s.length_ratio_median, 3), _fmt(s.length_ratio_max, 3),
+            _fmt(s.first_ratio_median, 3), _fmt(s.longer_than_first, 2), _fmt(s.expansions_per_s, 0),
             _fmt(s.clearance_median_m, 3), _fmt(s.reported_clearance_median_m, 3),
         ])
     head = [c[0] for c in TABLE_COLUMNS]

@@ -148,3 +148,16 @@ def test_boundary_cells_are_the_blocked_cells_next_to_free_space():
     assert np.all((centres >= 7.0) & (centres <= 8.0))
     with_edge = boundary_cell_centres(grid, edge_blocked=True)
     assert len(with_edge) == 36 + 2 * (200 + 160) + 4  # plus the ring just outside the map
+
+
+def test_the_compiled_distance_transform_equals_scipys():
+    from scipy.ndimage import distance_transform_edt
+
+    from planner.maps.clearance import edt_cells
+
+    rng = np.random.default_rng(21)
+    for shape, share in (((7, 9), 0.1), ((50, 80), 0.02), ((120, 90), 0.3), ((1, 5), 0.0), ((30, 30), 0.0),
+                         ((16, 16), 1.0)):
+        blocked = rng.random(shape) < share
+        ref = distance_transform_edt(~np.pad(blocked, 1, constant_values=True))[1:-1, 1:-1]
+        assert np.array_equal(edt_cells(blocked), ref)

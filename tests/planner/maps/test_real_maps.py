@@ -21,6 +21,8 @@ from service.cli import main
 
 REAL = Path(__file__).resolve().parents[3] / "maps" / "real"
 # name: (width, height, resolution, origin, free, occupied, unknown, sha256 of grid.data)
+#: the synthetic Nav2-style maps tools/generate_real_maps.py builds (maps/real/README.md)
+GENERATED = {"pockets", "bays"}
 ORIGINALS = {
     "100by100_20": (2000, 2000, 0.05, (0.0, 0.0, 0.0), 3175585, 824415, 0,
                     "ab9b8f6a8c100953b7062ab64bceb6ce020dc007afd81dc699394c1461219b00"),
@@ -77,6 +79,21 @@ def test_flat_index_skips_the_real_subfolder_but_lists_it_on_request(capsys: pyt
     assert main(["maps"]) == 0
     assert "100by100_20" not in capsys.readouterr().out
     listed = {m["name"]: m for m in list_maps(REAL)}
-    assert set(listed) == set(ORIGINALS)
+    assert set(listed) == set(ORIGINALS) | GENERATED
     assert listed["100by100_20"]["size_m"] == [100.0, 100.0]
     assert all("error" not in m for m in listed.values())
+
+
+def test_the_generated_maps_are_what_their_generator_makes(tmp_path: Path) -> None:
+    """pockets and bays are rebuilt byte for byte by tools/generate_real_maps.py (maps/real/README.md says so)."""
+    import subprocess
+    import sys
+
+    repo = REAL.parents[1]
+    proc = subprocess.run([sys.executable, str(repo / "tools" / "generate_real_maps.py"), "--out", str(tmp_path)],
+                          capture_output=True, text=True, cwd=repo)
+    assert proc.returncode == 0, proc.stderr
+    for name in GENERATED:
+        made = load_map(tmp_path / f"{name}.yaml")
+        shipped = load_map(REAL / f"{name}.yaml")
+        assert made.data.shape == shipped.data.shape and (made.data == shipped.data).all(), name
