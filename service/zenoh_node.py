@@ -329,7 +329,8 @@ class ZenohNode:
         if not newest:
             self.service.cancel(future)
         goal_pose = dict(zip(("x", "y", "yaw"), goal.goal.as_pose(), strict=True))
-        self._status(robot_id, goal_id, "planning", start=pose.model_dump(), goal=goal_pose)
+        start_pose = dict(zip(("x", "y", "yaw"), pose.as_pose(), strict=True))  # radians, as the goal
+        self._status(robot_id, goal_id, "planning", start=start_pose, goal=goal_pose)
         future.add_done_callback(lambda done: self._goal_done(robot_id, goal_id, done, done.result()))
 
     def _goal_done(self, robot_id: str, goal_id: int, future: Future[Outcome], outcome: Outcome) -> None:

@@ -304,7 +304,8 @@ def test_large_bodies_are_parsed_off_the_event_loop() -> None:
 def test_health_probes_answer_while_sixteen_clients_send_large_bodies(client: httpx.Client, server: Server) -> None:
     """Finding 3: 16 concurrent MB-sized bodies blocked ``/healthz`` for 20 s. The bound (≤ 100 ms) is measured
     by ``sphereplan bench --suite load``; here every probe must answer and no big body may get a 5xx but 503."""
-    grid = {"data": [[0] * 1000 for _ in range(1000)], "resolution_m": 0.05}  # ≈ 3 MB of JSON, over the cell cap
+    # ≈ 3 MB of JSON that must be parsed before it is refused (its resolution is out of range)
+    grid = {"data": [[0] * 1000 for _ in range(1000)], "resolution_m": 500.0}
     body = json.dumps({**plan_body(), "map": grid}).encode()
 
     async def run() -> tuple[list[int], list[int]]:

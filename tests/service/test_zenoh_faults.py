@@ -73,11 +73,12 @@ def test_a_burst_of_goals_ends_with_the_path_of_the_newest(server: Server) -> No
 def test_large_payloads_do_not_hold_a_small_query(server: Server) -> None:
     """Finding 3: Zenoh callbacks were serialised, so a 4-byte query waited behind 8 × 4 MB ones. Large payloads
     are parsed in the parse pool now; each is answered, and so is the small query sent with them."""
-    big = json.dumps({**plan_body(), "map": {"data": [[0] * 1000 for _ in range(1000)], "resolution_m": 0.05}})
+    # ≈ 3 MB each, parsed before they are refused (the resolution is out of range)
+    big = json.dumps({**plan_body(), "map": {"data": [[0] * 1000 for _ in range(1000)], "resolution_m": 500.0}})
     answer = zenoh_steps(server, [{"queries": [*({"query": "sphereplan/plan", "payload": big} for _ in range(8)),
                                                {"query": "sphereplan/plan", "payload": plan_body()}]}])[0]
     *large, small = answer["replies"]
     assert small["ok"] and small["payload"]["status"] == "exact", small
     for reply in large:  # refused for its cells (or busy), never an internal error
-        assert not reply["ok"] and reply["payload"]["field"] in ("map", "map.data", None), reply
+        assert not reply["ok"] and (reply["payload"]["field"] or "map").startswith("map"), reply
         assert "internal" not in reply["payload"]["error_msg"]
