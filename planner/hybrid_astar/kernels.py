@@ -4,6 +4,10 @@ Everything here works on preallocated arrays so that numba can compile it; the P
 :mod:`planner.hybrid_astar.search` owns the arrays, checks the deadline and cancellation between chunks, grows the
 node storage and turns the result into a path. Status codes returned by :func:`search_chunk`:
 RUNNING (chunk finished, call again), FOUND, EXHAUSTED (open list empty), FULL (grow node storage).
+
+:func:`search_chunk` stays one long function on purpose: its body is one expansion (pop, goal test, analytic shot,
+children, push) run hundreds of thousands of times, and keeping it in one compiled frame avoids passing the
+twenty-odd arrays through a call per stage per expansion. Its stages are marked with numbered comments instead.
 """
 
 from __future__ import annotations
