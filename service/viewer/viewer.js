@@ -309,7 +309,7 @@ function showLive(status) {
   $("l-known").textContent = `${(status.known_fraction * 100).toFixed(1)} %`;
 }
 
-$("live").addEventListener("click", () => run("live session", async () => {
+$("live").addEventListener("click", () => run("live session", "plan", async () => {
   if (viewer.live) { viewer.live.events.close(); await api("DELETE", `/v1/sessions/${viewer.live.id}`).catch(() => null); }
   const body = { map: viewer.map, robot: $("robot").value, start: viewer.start, goal: viewer.goal };
   const session = await api("POST", "/v1/sessions", body);
