@@ -39,10 +39,15 @@ def _summary(result: dict[str, Any]) -> dict[str, Any]:
 
 
 def _emit(result: dict[str, Any], out: str | None) -> None:
-    """The full result to ``out`` (and its figures without time series on stdout), or all of it on stdout."""
+    """The full result to ``out`` (and its figures without time series on stdout), or all of it on stdout; a
+    one-line summary on stderr."""
     emit_json(result, out)
     if out:
         emit_json(_summary(result), None)
+    rise = result.get("rise_time_s")
+    rise_text = "none" if rise is None else f"{rise:.3f} s"
+    say("controllers", f"{result.get('experiment', 'step')} with {result.get('controller')}: rise {rise_text}, "
+                       f"overshoot {100 * result.get('overshoot', 0):.1f} %")
 
 
 def _step(args: argparse.Namespace) -> int:

@@ -12,7 +12,7 @@ from pathlib import Path
 from typing import Any
 
 from planner.errors import NotFound
-from service.cli._io import emit_json
+from service.cli._io import emit_json, say
 
 VERB = "maps"
 HELP = "list the shipped maps (grids and meshes) and problem sets (a table; --json for JSON)"
@@ -48,6 +48,7 @@ def run(args: argparse.Namespace) -> int:
         emit_json(result, args.out)
     else:
         sys.stdout.write(format_table(result))
+    say("maps", f"{len(result['maps'])} maps and {len(result['problems'])} problems in {result['maps_dir']}")
     return 0
 
 

@@ -71,6 +71,10 @@ def _run_static(args: argparse.Namespace) -> int:
         not args.no_verify,
     )
     emit_json(result, args.out)
+    feasible = [str(s["state"]) for s in result["states"] if s["feasible"]]
+    checked = "" if args.no_verify else f", checked by energy minimisation: {result['verified']}"
+    states = ", ".join(feasible) or "none"
+    say("tensegrity static", f"feasible rest states {states} of {len(result['states'])}{checked}")
     return 0
 
 
@@ -100,5 +104,8 @@ def _run_formfind(args: argparse.Namespace) -> int:
     from planner.robot import load_robot
     from planner.tensegrity import form_find
 
-    emit_json(form_find(load_robot(args.robot), args.fix_centre, args.starts, args.seed), args.out)
+    result = form_find(load_robot(args.robot), args.fix_centre, args.starts, args.seed)
+    emit_json(result, args.out)
+    say("tensegrity formfind", f"cable energy {result['energy_j']:.4g} J, "
+                               f"{result['rotation_error_deg_vs_eq3']:.3g}° from eq. 3's rotation")
     return 0

@@ -20,6 +20,7 @@ from service.cli._io import (
     is_mcap_out,
     positive_float,
     read_json_file,
+    say,
 )
 from service.outcome import EXIT_NO_SOLUTION
 
@@ -30,30 +31,42 @@ HELP = "VPIP rod driver for rod-driven spheres (daedalus): rods, radius, roll, c
 def _rods(args: argparse.Namespace) -> int:
     from planner.vpip import api
 
-    emit_json(
-        api.rods_report(
-            angle(args, args.phi_vpip, "--phi-vpip"),
-            angle(args, args.theta_vpip, "--theta-vpip"),
-            angle(args, args.roll, "--roll"),
-            angle(args, args.pitch_phase, "--pitch-phase"),
-            args.robot,
-        ),
-        None,
+    report = api.rods_report(
+        angle(args, args.phi_vpip, "--phi-vpip"),
+        angle(args, args.theta_vpip, "--theta-vpip"),
+        angle(args, args.roll, "--roll"),
+        angle(args, args.pitch_phase, "--pitch-phase"),
+        args.robot,
     )
+    emit_json(report, None)
+    active = [r for r in report["rods"] if r["active"]]
+    longest = max((r["length_m"] for r in active), default=0.0)
+    say("vpip rods", f"{len(active)} of {len(report['rods'])} rods active, the longest {longest:.3f} m")
     return 0
 
 
 def _radius(args: argparse.Namespace) -> int:
     from planner.vpip import api
 
-    emit_json(api.radius_report(angle(args, args.roll, "--roll"), args.robot), None)
+    report = api.radius_report(angle(args, args.roll, "--roll"), args.robot)
+    emit_json(report, None)
+    radius = report["radius_m"]
+    turn = "rolls straight" if radius is None else f"turns on a {radius:.3f} m radius"
+    say("vpip radius", f"roll {report['roll_rad']:.4g} rad {turn} "
+                       f"({report['model']}{', beyond the table' if report['beyond_table'] else ''})")
     return 0
 
 
 def _roll(args: argparse.Namespace) -> int:
     from planner.vpip import api
 
-    emit_json(api.roll_report(args.radius, args.robot, left=not args.right), None)
+    report = api.roll_report(args.radius, args.robot, left=not args.right)
+    emit_json(report, None)
+    if report["roll_rad"] is None:
+        say("vpip roll", f"a {report['radius_m']:.3f} m radius is not achievable")
+    else:
+        say("vpip roll", f"a {report['radius_m']:.3f} m radius needs roll {report['roll_rad']:.4g} rad "
+                         f"({report['roll_deg']:.2f}°){'' if report['achievable'] else ', not achievable'}")
     return 0
 
 

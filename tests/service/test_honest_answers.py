@@ -432,3 +432,22 @@ def test_a_schedule_that_falls_short_is_a_failure_at_every_door(monkeypatch: pyt
     monkeypatch.setattr(api, "schedule_report",
                         lambda plan, robot, driver, termination=None: {**short, "summary": {"reached_end": True}})
     assert vpip_schedule_job({}, "daedalus", "vpip", Termination()).ok
+
+
+# ------------------------------------------------------------------------------------- 10. a summary for every verb
+@pytest.mark.parametrize("argv, line", [
+    (["maps"], "sphereplan maps: "),
+    (["vpip", "rods", "--phi-vpip", "0.1", "--theta-vpip", "0.2"], "sphereplan vpip rods: "),
+    (["vpip", "radius", "--roll", "0.1"], "sphereplan vpip radius: roll 0.1 rad turns on a"),
+    (["vpip", "radius", "--roll", "0"], "sphereplan vpip radius: roll 0 rad rolls straight"),
+    (["vpip", "roll", "--radius", "2"], "sphereplan vpip roll: a 2.000 m radius needs roll"),
+    (["tensegrity", "static", "--theta1", "0.3", "--theta2", "1.2"], "sphereplan tensegrity static: feasible"),
+    (["controllers", "step", "--controller", "pid", "--speed", "0.5", "--duration", "2"],
+     "sphereplan controllers: speed_step with pid: rise"),
+])
+def test_every_verb_ends_with_a_summary_line(capsys: pytest.CaptureFixture[str], argv: list[str], line: str) -> None:
+    code, _, err = run(capsys, *argv)
+    assert code == 0, err
+    assert any(row.startswith(line) for row in err.splitlines()), err
+    code, _, err = run(capsys, "-q", *argv)  # -q silences it
+    assert code == 0 and not err.strip(), err
