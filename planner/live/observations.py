@@ -14,6 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from planner.angles import check_angle
 from planner.errors import InvalidInput
 
 MAX_POINTS = 1_000_000
@@ -43,8 +44,8 @@ class SensorPose:
     def __post_init__(self) -> None:
         for name in ("x", "y", "z", "yaw", "pitch", "roll"):
             value = _finite(getattr(self, name), f"sensor_pose.{name}")
-            if name in ("yaw", "pitch", "roll") and abs(value) > 2 * math.pi:
-                raise InvalidInput(f"sensor_pose.{name}", f"must be in [-2π, 2π] rad (degrees given?), got {value!r}")
+            if name in ("yaw", "pitch", "roll"):
+                check_angle(f"sensor_pose.{name}", value, "degrees converted to radians")
 
     def rotation(self) -> np.ndarray:
         """The 3×3 rotation from the sensor frame to the map frame (R = Rz(yaw)·Ry(pitch)·Rx(roll))."""
@@ -116,10 +117,9 @@ class ScanObservation:
             raise InvalidInput("ranges", f"at most {MAX_POINTS} beams per scan, got {len(ranges)}")
         if np.any(ranges < 0):
             raise InvalidInput("ranges", "must be ≥ 0 (inf for no return)")
-        _finite(self.angle_min_rad, "angle_min")
-        inc = _finite(self.angle_increment_rad, "angle_increment")
-        if abs(self.angle_min_rad) > 2 * math.pi or abs(inc) > 2 * math.pi:
-            raise InvalidInput("angle_increment", "angles must be in [-2π, 2π] rad (degrees given?)")
+        check_angle("angle_min", _finite(self.angle_min_rad, "angle_min"), "degrees converted to radians")
+        check_angle("angle_increment", _finite(self.angle_increment_rad, "angle_increment"),
+                    "degrees converted to radians")
         lo, hi = _finite(self.range_min_m, "range_min"), _finite(self.range_max_m, "range_max")
         if not 0 <= lo < hi:
             raise InvalidInput("range_max", f"must be > range_min ≥ 0, got range_min={lo}, range_max={hi}")

@@ -21,6 +21,7 @@ from typing import Any
 
 import numpy as np
 
+from planner.angles import check_angle
 from planner.errors import GoalOccupied, InvalidInput, PlanningError, StartOccupied
 from planner.hybrid_astar.search import HybridAStar, PlannerOptions, Pose
 from planner.kinematics import wrap
@@ -104,9 +105,7 @@ def _pose(value: Any, field_name: str) -> Pose:
         raise InvalidInput(field_name, f"must be three numbers x, y, yaw, got {value!r}") from None
     if not all(math.isfinite(v) for v in (x, y, yaw)):
         raise InvalidInput(field_name, "must be finite numbers")
-    if abs(yaw) > 2 * math.pi:
-        raise InvalidInput(f"{field_name}.yaw", f"must be in [-2π, 2π] rad (degrees given?), got {yaw!r}")
-    return x, y, wrap(yaw)
+    return x, y, wrap(check_angle(f"{field_name}.yaw", yaw, "degrees converted to radians"))
 
 
 @dataclass

@@ -27,23 +27,17 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from planner.errors import InvalidInput
+from planner import angles
 
 #: the optical axes (x right, y down, z forward) as columns in the robot frame (x forward, y left, z up)
 OPTICAL_IN_BODY = np.array([[0.0, 0.0, 1.0], [-1.0, 0.0, 0.0], [0.0, -1.0, 0.0]])
 
 #: the largest magnitude an angle in radians may have (docs/contracts.md: beyond it, degrees given as radians)
-MAX_ANGLE_RAD = 2 * math.pi
 
 
 def check_angle(value: float, field: str) -> float:
-    """``value`` (rad) if finite and within [−2π, 2π]; else :class:`InvalidInput` naming ``field``."""
-    if not math.isfinite(value):
-        raise InvalidInput(field, f"{value!r} is not a finite angle")
-    if abs(value) > MAX_ANGLE_RAD:
-        raise InvalidInput(field, f"{value:g} rad is outside [−2π, 2π]: degrees given as radians? "
-                                  "(say they are degrees: --degrees)")
-    return float(value)
+    """``value`` (rad) by the one angle rule of every door (:func:`planner.angles.check_angle`)."""
+    return float(angles.check_angle(field, float(value), "--degrees (CLI) or \"degrees\": true (HTTP, Zenoh)"))
 
 
 def rot_x(a: float) -> np.ndarray:

@@ -130,3 +130,24 @@ def test_bad_observations_name_the_field() -> None:
     with pytest.raises(InvalidInput) as err:
         ScanObservation(np.array([1.0]), 0.0, 0.1, 2.0, 1.0, SensorPose(0.0, 0.0))
     assert err.value.field == "range_max"
+
+
+def test_observation_angles_follow_the_one_angle_rule_naming_the_field() -> None:
+    """Scans, sensor poses and session poses refuse degrees given as radians by planner.angles' rule, naming
+    the very field that is wrong."""
+    import pytest as _pytest
+
+    from planner.errors import InvalidInput
+    from planner.live.observations import ScanObservation, SensorPose
+
+    with _pytest.raises(InvalidInput) as bad_min:
+        ScanObservation(ranges_m=[1.0, 1.0], angle_min_rad=-90.0, angle_increment_rad=0.01,
+                        range_min_m=0.1, range_max_m=10.0, sensor=SensorPose(0.0, 0.0))
+    assert bad_min.value.field == "angle_min"
+    with _pytest.raises(InvalidInput) as bad_inc:
+        ScanObservation(ranges_m=[1.0, 1.0], angle_min_rad=-1.0, angle_increment_rad=45.0,
+                        range_min_m=0.1, range_max_m=10.0, sensor=SensorPose(0.0, 0.0))
+    assert bad_inc.value.field == "angle_increment"
+    with _pytest.raises(InvalidInput) as bad_yaw:
+        SensorPose(0.0, 0.0, yaw=180.0)
+    assert bad_yaw.value.field == "sensor_pose.yaw" and "outside [−2π, 2π]" in bad_yaw.value.msg
