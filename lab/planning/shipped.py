@@ -97,6 +97,18 @@ def bounded_to(space: Any, grid: OccupancyGrid) -> Any:
     return space
 
 
+def ompl_states(space: Any, *poses: tuple[float, float, float]) -> list[Any]:
+    """OMPL SE(2) states (Dubins or Reeds–Shepp space) at ``poses`` (x, y, yaw), the yaw put in OMPL's [−π, π)."""
+    states = []
+    for pose in poses:
+        st = space.allocState()
+        st.setX(pose[0])
+        st.setY(pose[1])
+        st.setYaw(math.remainder(pose[2], 2 * math.pi) if pose[2] < math.pi else -math.pi)
+        states.append(st)
+    return states
+
+
 def bench_ompl(problem: Problem, grid: OccupancyGrid, robot: RobotProfile, planner_name: str,
                time_s: float) -> BenchRow:
     """One OMPL run: time to the first exact solution, then optimise until ``time_s``; final length."""
@@ -118,11 +130,7 @@ def bench_ompl(problem: Problem, grid: OccupancyGrid, robot: RobotProfile, plann
     info = setup.getSpaceInformation()
     extent = max(grid.size_m)
     info.setStateValidityCheckingResolution(0.5 * grid.resolution_m / extent)
-    start, goal = space.allocState(), space.allocState()
-    for st, pose in ((start, problem.start), (goal, problem.goal)):
-        st.setX(pose[0])
-        st.setY(pose[1])
-        st.setYaw(math.remainder(pose[2], 2 * math.pi) if pose[2] < math.pi else -math.pi)  # OMPL: [−π, π)
+    start, goal = ompl_states(space, problem.start, problem.goal)
     setup.setStartAndGoalStates(start, goal, 0.1)
     pdef = setup.getProblemDefinition()
     t0 = time.perf_counter()

@@ -17,7 +17,7 @@ import numpy as np
 
 from lab.planning.real.problems import RealProblem
 from lab.planning.referee import FootprintReferee
-from lab.planning.shipped import bounded_to
+from lab.planning.shipped import bounded_to, ompl_states
 from planner.errors import (
     GoalOccupied,
     NoValidPathFound,
@@ -199,11 +199,7 @@ def run_reference(problem: RealProblem, grid: OccupancyGrid, robot: RobotProfile
     setup.setStateValidityChecker(valid)
     info = setup.getSpaceInformation()
     info.setStateValidityCheckingResolution(0.5 * res / space.getMaximumExtent())
-    start, goal = space.allocState(), space.allocState()
-    for st, pose in ((start, problem.start), (goal, problem.goal)):
-        st.setX(pose[0])
-        st.setY(pose[1])
-        st.setYaw(math.remainder(pose[2], 2 * math.pi) if pose[2] < math.pi else -math.pi)  # OMPL: [−π, π)
+    start, goal = ompl_states(space, problem.start, problem.goal)
     setup.setStartAndGoalStates(start, goal, 0.01)
     pdef = setup.getProblemDefinition()
     bit = og.BITstar(info)
