@@ -7,8 +7,7 @@ imported on first use (as in :mod:`planner`), so ``import planner.vpip.choices``
 
 from __future__ import annotations
 
-import importlib
-from typing import Any
+from planner.lazy import lazy_exports
 
 #: public name → the module that defines it
 _EXPORTS: dict[str, str] = {
@@ -39,14 +38,4 @@ _EXPORTS: dict[str, str] = {
 __all__ = sorted(_EXPORTS)
 
 
-def __getattr__(name: str) -> Any:
-    module = _EXPORTS.get(name)
-    if module is None:
-        raise AttributeError(f"module 'planner.vpip' has no attribute {name!r}")
-    value = getattr(importlib.import_module(module), name)
-    globals()[name] = value
-    return value
-
-
-def __dir__() -> list[str]:
-    return sorted(set(globals()) | set(__all__))
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS, globals(), __all__)
