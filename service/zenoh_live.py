@@ -34,7 +34,7 @@ from service.outcome import outcome_of_exception
 from service.sessions import Entry, SessionStore, path_json
 from service.wire import NAME_PATTERN, PoseIn
 from service.wire_live import ObservationIn, SessionCreate
-from service.zenoh_entities import undeclare_all
+from service.zenoh_entities import RELIABLE, undeclare_all
 from service.zenoh_node import JSON, PREFIX, parse
 
 log = logging.getLogger(__name__)
@@ -148,14 +148,15 @@ class LiveZenohNode:
     def _publish(self, entry: Entry, event: ReplanEvent) -> None:
         if event.ok:
             path = path_json(entry)
-            self.session.put(f"{PREFIX}/{entry.id}/live/path", json.dumps(path, allow_nan=False), encoding=JSON)
+            self.session.put(f"{PREFIX}/{entry.id}/live/path", json.dumps(path, allow_nan=False), encoding=JSON,
+                             congestion_control=RELIABLE)
         self._status(entry.id, {"state": "replanned" if event.ok else "failed", "replan": event.to_json(),
                                 "status": entry.session.status()})
 
     def _status(self, robot_id: str, body: dict[str, Any]) -> None:
         try:
             self.session.put(f"{PREFIX}/{robot_id}/live/status", json.dumps({"robot_id": robot_id, **body}),
-                             encoding=JSON)
+                             encoding=JSON, congestion_control=RELIABLE)
         except Exception as exc:  # closing
             log.warning("could not publish the status of %s: %s", robot_id, exc)
 

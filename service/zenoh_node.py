@@ -61,7 +61,7 @@ from service.wire import (
     ReconfigureIn,
     SimulateRequest,
 )
-from service.zenoh_entities import undeclare_all
+from service.zenoh_entities import RELIABLE, undeclare_all
 
 log = logging.getLogger(__name__)
 
@@ -249,7 +249,7 @@ class ZenohNode:
             return
         payload = data if isinstance(data, bytes) else json.dumps(data, allow_nan=False).encode()
         try:
-            session.put(f"{PREFIX}/{robot_id}/{topic}", payload, encoding=JSON)
+            session.put(f"{PREFIX}/{robot_id}/{topic}", payload, encoding=JSON, congestion_control=RELIABLE)
         except Exception as exc:  # closing
             log.warning("could not publish %s/%s: %s", robot_id, topic, exc)
 

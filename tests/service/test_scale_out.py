@@ -108,10 +108,12 @@ def test_each_goal_is_planned_by_exactly_one_instance(zenoh_fleet: tuple[Fleet, 
                       "payload": {"map": "hall", "goal": {"x": 8.0, "y": 1.5 + 0.01 * i, "yaw": 0.0}}})
     # every robot's own success (goals of one instance may finish out of order on a busy machine); a wait returns
     # at once when its sample has already arrived
-    steps += [{"wait": f"/{robot}/status", "until": {"state": "succeeded"}, "timeout_s": 240} for robot in robots]
+    # one shared deadline (not 240 s per robot): a lost status ends in the assertion below, naming the robots
+    steps.append({"wait_all": [f"/{robot}/status" for robot in robots], "until": {"state": "succeeded"},
+                  "timeout_s": 400})
     steps.append({"sleep": 3.0})  # a second instance's (wrong) path would arrive meanwhile
     steps.append({"wait": "/status", "until": {"never": True}, "timeout_s": 0})
-    samples = _steps(endpoint, steps)[-1]["samples"]
+    samples = _steps(endpoint, steps, timeout_s=600)[-1]["samples"]
     paths = Counter(s["key"].split("/")[1] for s in samples if s["key"].endswith("/path"))
     succeeded = Counter(s["key"].split("/")[1] for s in samples
                         if s["key"].endswith("/status") and s["payload"]["state"] == "succeeded")

@@ -12,6 +12,7 @@
   {"wait": KEY_SUFFIX, "until": {field: value}, "timeout_s": S}   -> {"samples": [...]} (stops at the first
                                                                      sample on a key ending in KEY_SUFFIX whose
                                                                      payload has those fields)
+  {"wait_all": [KEY_SUFFIX, ...], "until": ..., "timeout_s": S}    -> the same, once every suffix has had one
   {"liveliness": KEY_EXPR}                                         -> {"tokens": [key, ...]}
 A query or put may carry "attachment" (a string, e.g. "Bearer <token>"); a query "consolidation": "none" has
 every reply kept (to count how many instances answered), each reply then with its "replier" id.
@@ -82,13 +83,20 @@ def _concurrent_queries(session: zenoh.Session, queries: list[dict[str, Any]]) -
     return {"replies": [g[0] if len(g) == 1 else (g or None) for g in got], "all_replies": got, "order": order}
 
 
-def _wait(samples: list[tuple[str, Any]], arrived: threading.Condition, suffix: str, want: dict[str, Any],
+def _wait(samples: list[tuple[str, Any]], arrived: threading.Condition, suffixes: list[str], want: dict[str, Any],
           timeout_s: float) -> dict[str, Any]:
+    """Until, for every suffix, a sample whose key ends with it matches ``want`` (or the timeout)."""
     deadline = time.monotonic() + timeout_s
+    missing = set(suffixes)
+    seen = 0  # samples already looked at
 
     def matched() -> bool:
-        return any(key.endswith(suffix) and isinstance(data, dict) and all(data.get(k) == v for k, v in want.items())
-                   for key, data in samples)
+        nonlocal seen
+        for key, data in samples[seen:]:
+            if isinstance(data, dict) and all(data.get(k) == v for k, v in want.items()):
+                missing.difference_update([suffix for suffix in missing if key.endswith(suffix)])
+        seen = len(samples)
+        return not missing
 
     with arrived:
         while not matched() and time.monotonic() < deadline:
@@ -120,14 +128,17 @@ def run(endpoint: str, steps: list[dict[str, Any]]) -> list[dict[str, Any]]:
                 answers.append(_concurrent_queries(session, step["queries"]))
             elif "put" in step:
                 attachment = step.get("attachment")
+                # BLOCK, as a robot sending its goal would: the default (DROP) may lose a sample on a busy machine
                 session.put(step["put"], _encode(step["payload"]), encoding=zenoh.Encoding.APPLICATION_JSON,
-                            attachment=None if attachment is None else attachment.encode())
+                            attachment=None if attachment is None else attachment.encode(),
+                            congestion_control=zenoh.CongestionControl.BLOCK)
                 answers.append({})
             elif "subscribe" in step:
                 subscribers.append(session.declare_subscriber(step["subscribe"], on_sample))
                 answers.append({})
-            elif "wait" in step:
-                answers.append(_wait(samples, arrived, step["wait"], step.get("until", {}),
+            elif "wait" in step or "wait_all" in step:
+                suffixes = step["wait_all"] if "wait_all" in step else [step["wait"]]
+                answers.append(_wait(samples, arrived, suffixes, step.get("until", {}),
                                      float(step.get("timeout_s", 30))))
             elif "liveliness" in step:
                 tokens = [str(r.ok.key_expr) for r in session.liveliness().get(step["liveliness"], timeout=5)
