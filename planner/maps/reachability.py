@@ -39,7 +39,7 @@ _LABELS: weakref.WeakKeyDictionary[ClearanceMap, dict[float, tuple[int, np.ndarr
 
 def _fingerprint(blocked: np.ndarray) -> int:
     data = np.ascontiguousarray(blocked)
-    return zlib.crc32(memoryview(data).cast("B")) ^ (data.shape[0] << 32) ^ (data.shape[1] << 48)
+    return zlib.crc32(data.data) ^ (data.shape[0] << 32) ^ (data.shape[1] << 48)
 
 
 def components(clearance: ClearanceMap, inradius_m: float) -> np.ndarray:

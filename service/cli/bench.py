@@ -55,9 +55,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     real.add_argument("--options", default=None,
                       help="JSON object of sphereplan planner options (default: the defaults), e.g. "
                            "'{\"allow_reverse\": true}'")
-    real.add_argument("--reference-time", type=positive_float, default=None,
+    real.add_argument("--reference-time", type=finite_float, default=None,
                       help="BIT*'s budget per space and problem, s: the first solution (within --time-limit), then "
-                           "optimising until this much in all; its final path is the reference's best (default 3)")
+                           "optimising until this much in all; its final path is the reference's best (default 3; "
+                           "0 = optimise until the time limit)")
     real.add_argument("--no-reference", action="store_true", help="skip OMPL BIT* (no solvability reference)")
     perception = parser.add_argument_group("--suite perception")
     perception.add_argument("--threads", type=int, default=1, help="OpenCV threads (default 1: one core)")
@@ -93,6 +94,9 @@ def run_real(args: argparse.Namespace) -> int:
 
     if args.per_map < 1:
         raise InvalidInput("--per-map", "must be ≥ 1")
+    reference_s = DEFAULT_REFERENCE_S if args.reference_time is None else args.reference_time
+    if reference_s < 0:
+        raise InvalidInput("--reference-time", "must be ≥ 0 (0 = until the time limit)")
     robot = load_robot(args.robot)
     options = _options(args.options)
     given = args.real_maps if args.real_maps is not None else ",".join(real_map_names())
@@ -110,12 +114,13 @@ def run_real(args: argparse.Namespace) -> int:
             bar.set_postfix_str(msg[:40])
             bar.update(1)
 
-        reference_s = DEFAULT_REFERENCE_S if args.reference_time is None else args.reference_time
         result = run_real_bench(paths, robot, args.per_map, args.seed, time_limit_s=args.time_limit,
-                                options=options, reference=not args.no_reference, reference_s=reference_s,
+                                options=options, reference=not args.no_reference,
+                                reference_s=reference_s or None,
                                 progress=progress)
     limit = "default limits (10 s ≥ 1 M cells, else 5 s)" if args.time_limit is None else f"{args.time_limit:g} s"
-    ref = "no BIT*" if args.no_reference else f"BIT* {reference_s:g} s per space"
+    ref = ("no BIT*" if args.no_reference else f"BIT* {reference_s:g} s per space" if reference_s
+           else "BIT* optimising until the limit")
     title = (f"sphereplan bench --suite real: {robot.name}, {len(paths)} maps × {args.per_map} problems, seed "
              f"{args.seed}, {limit}, {ref}, {'reversing' if result.reverse_allowed else 'forward-only'} sphereplan")
     print(title)

@@ -179,7 +179,7 @@ class ReferenceWorker:
             if kind == "first":
                 first = data
             elif kind == "done":
-                return data  # type: ignore[no-any-return]
+                return data
             else:
                 log.warning("%s %s raised in the worker: %s", problem.name, planner, data)
                 return _record(problem, planner, "error", time_limit_s, time_limit_s,
