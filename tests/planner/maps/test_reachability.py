@@ -119,16 +119,24 @@ def test_the_shipped_problems_refused_are_exactly_the_unsolvable_ones_and_the_se
     assert refused == sum(not p.solvable for p in problems)  # all ten shipped unsolvable goals are disconnected
 
 
-@pytest.mark.parametrize(("name", "n", "seed"), [("pockets", 10, 7), ("bays", 3, 1), ("depot", 3, 2),
-                                                 ("smoothers_world", 3, 3)])
+@pytest.mark.parametrize(("name", "n", "seed", "unreachable"), [
+    ("pockets", 3, 2, 1), ("bays", 3, 4, 1), ("depot", 3, 3, 1), ("smoothers_world", 3, 3, 0)])
 def test_real_map_problems_the_search_solves_are_never_refused(
-        monkeypatch: pytest.MonkeyPatch, name: str, n: int, seed: int) -> None:
+        monkeypatch: pytest.MonkeyPatch, name: str, n: int, seed: int, unreachable: int) -> None:
+    """Seeded draws that include a goal in a sealed pocket or bay: refused exactly where the bench's own
+    proof (on the lab referee's grid) says unreachable, and never where the search finds a path."""
     from lab.planning.real.problems import draw_problems, resolve_map
 
     grid = load_map(resolve_map(name))
     planner = planner_for(grid, ROBOT)
+    refused = 0
     for p in draw_problems(grid, ROBOT, n, np.random.default_rng(seed)):
         ok = goal_reachable(planner.clearance, planner.polygon, p.start, p.goal, planner.options.goal_tolerance_m)
-        assert ok == (not p.disconnected), p.name  # the bench's own proof (lab referee grid) agrees
+        assert ok == (not p.disconnected), p.name
         solved = _search_without_refusal(monkeypatch, planner, p.start, p.goal, 3.0)
         assert ok or not solved, p.name
+        if not ok:
+            refused += 1
+            with pytest.raises(NoValidPathFound, match="cannot reach"):
+                plan_path(grid, ROBOT, p.start, p.goal, termination=Termination(3.0))
+    assert refused == unreachable
