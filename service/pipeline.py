@@ -16,6 +16,7 @@ from planner.errors import GoalOutsideMap, InvalidInput, PlannerTimedOut, StartO
 from planner.hybrid_astar.heuristics import reeds_shepp_table
 from planner.hybrid_astar.plan import plan_path, planner_for
 from planner.hybrid_astar.search import RS_CELL_M, PlannerOptions, Pose, warm_up
+from planner.maps.reachability import prepare as prepare_reachability
 from planner.occupancy import OccupancyGrid
 from planner.result import PlanResult
 from planner.robot import RobotProfile
@@ -90,7 +91,8 @@ def execute_plan(query: PlanQuery, grid: OccupancyGrid, robot: RobotProfile) -> 
     # the map's preprocessing (distance transform; its size is the map's, bounded where the map is accepted) is
     # cached per map and not counted
     t_map = time.perf_counter()
-    planner_for(grid, robot, options)
+    planner = planner_for(grid, robot, options)
+    prepare_reachability(planner.clearance, planner.polygon)  # the flood fill's labels, also once per map
     map_s = time.perf_counter() - t_map
     limit = query.termination.time_limit_s
     remaining = limit - (clock.elapsed_s() - map_s)

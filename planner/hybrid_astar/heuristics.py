@@ -52,15 +52,26 @@ def coarse_cost_grid(
     A fine cell is passable when its clearance ≥ ``centre_threshold_m``; the proximity uses the
     clearance margin over ``circle_radius_m`` (an upper bound of the search's per-pose margin).
     """
-    h, w = clearance.shape
-    hc, wc = -(-h // factor), -(-w // factor)
-    pad = np.full((hc * factor, wc * factor), -np.inf)
-    pad[:h, :w] = clearance
-    blocks = pad.reshape(hc, factor, wc, factor).max(axis=(1, 3))
+    blocks = _block_max(clearance, factor)
     prox = proximity_cost(blocks - circle_radius_m, prox_range_m)
     mult = 1.0 + cost_penalty * np.asarray(prox, float)
     mult[blocks < centre_threshold_m] = np.inf
     return mult
+
+
+@njit(cache=True)
+def _block_max(clearance: np.ndarray, factor: int) -> np.ndarray:
+    """Max of each ``factor`` × ``factor`` block (partial blocks at the far edges), in one pass over the grid."""
+    h, w = clearance.shape
+    hc, wc = -(-h // factor), -(-w // factor)
+    out = np.full((hc, wc), -np.inf)
+    for y in range(h):
+        row = out[y // factor]
+        for x in range(w):
+            v = clearance[y, x]
+            if v > row[x // factor]:
+                row[x // factor] = v
+    return out
 
 
 @njit(cache=True)

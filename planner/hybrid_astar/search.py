@@ -51,6 +51,7 @@ from planner.hybrid_astar.heuristics import HolonomicHeuristic, auto_downsample,
 from planner.hybrid_astar.reeds_shepp import sphere_shot
 from planner.kinematics import child_pose, densify_motions, wrap
 from planner.maps.clearance import CircleFootprint, ClearanceMap, inscribed_radius
+from planner.maps.reachability import refuse_unreachable
 from planner.occupancy import OccupancyGrid
 from planner.result import PlanResult, build_states
 from planner.robot import RobotProfile
@@ -431,6 +432,7 @@ class HybridAStar:
         goal = (float(goal[0]), float(goal[1]), wrap(float(goal[2])))
         self._check_endpoint(start, "start")
         self._check_endpoint(goal, "goal")
+        refuse_unreachable(self.clearance, self.polygon, start, goal, o.goal_tolerance_m, t0)  # flood fill, ~ms
         heur = self.holonomic(goal[:2], start[:2])
         if not math.isfinite(heur(start[0], start[1])):
             raise NoValidPathFound(

@@ -134,10 +134,9 @@ def centre_distance(grid: OccupancyGrid, allow_unknown: bool = False) -> np.ndar
     """Distance (m, shape (height, width)) from each cell centre to the nearest blocked cell centre, the
     ring of cells just outside the map counting as blocked (exact Euclidean distance transform,
     :func:`edt_cells`)."""
-    return edt_cells(grid.blocked(allow_unknown)) * grid.resolution_m
+    return _edt_scaled(grid.blocked(allow_unknown), float(grid.resolution_m), 0.0)
 
 
-@njit(cache=True)
 def edt_cells(blocked: np.ndarray) -> np.ndarray:
     """Exact Euclidean distance (in cells, float64, shape of ``blocked``) from each cell centre to the nearest
     blocked cell centre, the ring of cells just outside the grid counting as blocked.
@@ -147,40 +146,56 @@ def edt_cells(blocked: np.ndarray) -> np.ndarray:
     sites at q = −1 and q = width. Equals :func:`scipy.ndimage.distance_transform_edt` of the padded grid
     (tested) in a fraction of its time.
     """
+    return _edt_scaled(np.ascontiguousarray(blocked, dtype=np.bool_), 1.0, 0.0)
+
+
+def clearance_cells(blocked: np.ndarray, resolution_m: float) -> np.ndarray:
+    """The stored clearance (m) of :class:`ClearanceMap`: :func:`edt_cells` × resolution − √2·resolution, made
+    in the transform's own last pass (no temporary arrays; ≈ 40 ms for 4 M cells on one core)."""
+    return _edt_scaled(np.ascontiguousarray(blocked, dtype=np.bool_), float(resolution_m),
+                       math.sqrt(2.0) * float(resolution_m))
+
+
+@njit(cache=True)
+def _edt_scaled(blocked: np.ndarray, scale: float, offset: float) -> np.ndarray:
+    """:func:`edt_cells` × ``scale`` − ``offset``. Column distances are kept as int32 and the envelope's values
+    as exact integers; the square roots are taken in one flat (vectorised) pass at the end."""
     h, w = blocked.shape
-    big = float(h + w + 2)
-    g = np.empty((h, w))
+    g = np.empty((h, w), dtype=np.int32)
     # columns: distance to the nearest blocked cell above or below (or the outside ring), swept row by row
     for x in range(w):
-        g[0, x] = 0.0 if blocked[0, x] else 1.0
+        g[0, x] = 0 if blocked[0, x] else 1
     for y in range(1, h):
         for x in range(w):
-            g[y, x] = 0.0 if blocked[y, x] else g[y - 1, x] + 1.0
+            g[y, x] = 0 if blocked[y, x] else g[y - 1, x] + 1
     for x in range(w):
-        g[h - 1, x] = min(g[h - 1, x], 1.0)
+        if g[h - 1, x] > 1:
+            g[h - 1, x] = 1
     for y in range(h - 2, -1, -1):
         for x in range(w):
-            if g[y + 1, x] + 1.0 < g[y, x]:
-                g[y, x] = g[y + 1, x] + 1.0
+            below = g[y + 1, x] + 1
+            if below < g[y, x]:
+                g[y, x] = below
     out = np.empty((h, w))
     n = w + 2
-    f = np.empty(n)
+    f = np.empty(n, dtype=np.int64)
     v = np.empty(n, dtype=np.int64)
     z = np.empty(n + 1)
     for y in range(h):
-        f[0] = 0.0  # the ring's cell at q = −1 (site index 0)
+        f[0] = 0  # the ring's cell at q = −1 (site index 0)
         for x in range(w):
-            gx = g[y, x]
-            f[x + 1] = gx * gx if gx < big else big * big
-        f[n - 1] = 0.0  # the ring's cell at q = width
+            gx = np.int64(g[y, x])
+            f[x + 1] = gx * gx
+        f[n - 1] = 0  # the ring's cell at q = width
         k = 0
         v[0] = 0
         z[0] = -math.inf
         z[1] = math.inf
         for q in range(1, n):
+            fq = f[q] + q * q
             while True:
                 r = v[k]
-                s = ((f[q] + q * q) - (f[r] + r * r)) / (2.0 * (q - r))
+                s = (fq - (f[r] + r * r)) / (2.0 * (q - r))
                 if s <= z[k]:
                     k -= 1
                     continue
@@ -195,7 +210,10 @@ def edt_cells(blocked: np.ndarray) -> np.ndarray:
             while z[k + 1] < q:
                 k += 1
             r = v[k]
-            out[y, x] = math.sqrt((q - r) * (q - r) + f[r])
+            out[y, x] = (q - r) * (q - r) + f[r]
+    flat = out.ravel()
+    for i in range(flat.size):
+        flat[i] = math.sqrt(flat[i]) * scale - offset
     return out
 
 
@@ -221,7 +239,7 @@ class ClearanceMap:
     def __init__(self, grid: OccupancyGrid, allow_unknown: bool = False) -> None:
         self.grid = grid
         self.blocked = grid.blocked(allow_unknown)
-        self.clearance = centre_distance(grid, allow_unknown) - math.sqrt(2.0) * grid.resolution_m
+        self.clearance = clearance_cells(self.blocked, grid.resolution_m)
         self.origin_x = float(grid.origin[0])
         self.origin_y = float(grid.origin[1])
         self.resolution_m = float(grid.resolution_m)
@@ -236,8 +254,8 @@ class ClearanceMap:
         start and goal in different pieces proves that no motion joins them (a flood fill, as Nav2's
         planners refuse a goal in another connected region).
         """
-        centre = self.clearance + math.sqrt(2.0) * self.resolution_m  # back to centre-to-centre distances
-        kept = centre >= inradius_m - self.resolution_m * math.sqrt(0.5) - 1e-9
+        # the stored clearance is the centre-to-centre distance − √2·res: compare without a temporary array
+        kept = self.clearance >= inradius_m - self.resolution_m * (math.sqrt(0.5) + math.sqrt(2.0)) - 1e-9
         labels, _ = ndimage.label(kept, structure=np.ones((3, 3), dtype=bool))
         return np.asarray(labels, dtype=np.int32)
 

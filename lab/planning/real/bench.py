@@ -10,13 +10,13 @@ from pathlib import Path
 
 import numpy as np
 
+from lab.planning.real.isolated import ReferenceWorker
 from lab.planning.real.problems import DrawSettings, RealProblem, default_time_limit_s, draw_problems, resolve_map
 from lab.planning.real.runs import (
     BIT_DUBINS,
     BIT_REEDS_SHEPP,
     RunRecord,
     allows_reverse,
-    run_reference,
     run_sphereplan,
     with_reference_lengths,
 )
@@ -60,58 +60,76 @@ def _warm_up(robot: RobotProfile, options: PlannerOptions) -> None:
         log.warning("warm-up plan failed: %s", exc)
 
 
+DEFAULT_REFERENCE_S = 3.0  # BIT*'s budget per space and problem: first solution, then optimising, in all
+
+
 def run_real_bench(
     maps: Sequence[str | Path], robot: RobotProfile, per_map: int, seed: int, *,
     time_limit_s: float | None = None, options: PlannerOptions | None = None, reference: bool = True,
-    settings: DrawSettings | None = None, progress: Callable[[str], None] | None = None,
+    reference_s: float | None = DEFAULT_REFERENCE_S, settings: DrawSettings | None = None,
+    progress: Callable[[str], None] | None = None,
 ) -> RealBenchResult:
     """Draw ``per_map`` problems on each map (one ``numpy.random.default_rng(seed)`` for the whole run, maps
     in the given order) and run sphereplan and, with ``reference``, BIT* on Dubins and Reeds–Shepp.
 
-    ``time_limit_s`` None gives each map :func:`default_time_limit_s`. ``progress`` is called after every
-    single planner run with a short label.
+    ``time_limit_s`` None gives each map :func:`default_time_limit_s`; it bounds sphereplan and BIT*'s search
+    for a first solution alike. BIT* then optimises until ``reference_s`` in all (None: until the time limit);
+    its final length is the reference's best. Each BIT* run happens in a child process
+    (:class:`~lab.planning.real.isolated.ReferenceWorker`): a crash inside OMPL is recorded, not fatal.
+    ``progress`` is called after every single planner run with a short label.
     """
     from planner.maps.nav2 import load_map
 
     opts = options or PlannerOptions()
     reverse_allowed = allows_reverse(opts, robot)
     rng = np.random.default_rng(seed)
-    if reference:
-        from ompl import util as ou
-
-        ou.setLogLevel(ou.LOG_ERROR)
-        ou.RNG.setSeed(seed + 1)  # effective only before OMPL's first random number in this process
     _warm_up(robot, opts)
     records: list[RunRecord] = []
     drawn: list[RealProblem] = []
     checkers: dict[str, FootprintReferee] = {}
     setup: dict[str, float] = {}
     cells: dict[str, str] = {}
-    for spec in maps:
-        path = spec if isinstance(spec, Path) else resolve_map(spec)
-        grid = load_map(path)
-        name = grid.name
-        checker = FootprintReferee.for_robot(grid, robot, opts.allow_unknown)
-        checkers[name] = checker
-        cells[name] = f"{grid.width}×{grid.height}"
-        limit = time_limit_s if time_limit_s is not None else default_time_limit_s(grid)
-        problems = draw_problems(grid, robot, per_map, rng, map_name=name, allow_unknown=opts.allow_unknown,
-                                 settings=settings, checker=checker)
-        drawn.extend(problems)
-        t0 = time.perf_counter()
-        planner_for(grid, robot, opts)  # distance transform and heuristic grids, once per map, not timed per plan
-        setup[name] = time.perf_counter() - t0
-        log.info("%s: %d problems drawn, planner set up in %.2f s, limit %.1f s", name, len(problems),
-                 setup[name], limit)
-        for problem in problems:
-            records.append(run_sphereplan(problem, grid, robot, checker, opts, limit))
-            if progress:
-                progress(f"{problem.name} sphereplan")
-            if reference:
-                for planner in (BIT_DUBINS, BIT_REEDS_SHEPP):
-                    records.append(run_reference(problem, grid, robot, checker, planner, limit))
-                    if progress:
-                        progress(f"{problem.name} {planner}")
+    worker = ReferenceWorker(ompl_seed=seed + 1) if reference else None
+    try:
+        for spec in maps:
+            path = spec if isinstance(spec, Path) else resolve_map(spec)
+            grid = load_map(path)
+            name = grid.name
+            checker = FootprintReferee.for_robot(grid, robot, opts.allow_unknown)
+            checkers[name] = checker
+            cells[name] = f"{grid.width}×{grid.height}"
+            limit = time_limit_s if time_limit_s is not None else default_time_limit_s(grid)
+            problems = draw_problems(grid, robot, per_map, rng, map_name=name, allow_unknown=opts.allow_unknown,
+                                     settings=settings, checker=checker)
+            drawn.extend(problems)
+            setup[name] = prepare_planner(grid, robot, opts)
+            log.info("%s: %d problems drawn, planner set up in %.3f s, limit %.1f s", name, len(problems),
+                     setup[name], limit)
+            optimise = None if reference_s is None else max(reference_s, 0.0)
+            for problem in problems:
+                records.append(run_sphereplan(problem, grid, robot, checker, opts, limit))
+                if progress:
+                    progress(f"{problem.name} sphereplan")
+                if worker is not None:
+                    for planner in (BIT_DUBINS, BIT_REEDS_SHEPP):
+                        records.append(worker.run(problem, grid, robot, checker, planner, limit, optimise,
+                                                  map_key=str(path)))
+                        if progress:
+                            progress(f"{problem.name} {planner}")
+    finally:
+        if worker is not None:
+            worker.close()
     final = with_reference_lengths(records, reverse_allowed)
     summaries = summarise(final, checkers, reverse_allowed, setup, cells)
     return RealBenchResult(tuple(final), tuple(summaries), tuple(drawn), robot.name, seed, reverse_allowed)
+
+
+def prepare_planner(grid: OccupancyGrid, robot: RobotProfile, options: PlannerOptions) -> float:
+    """Seconds to get sphereplan ready for a map it has not seen: its planner (distance field, cost grid,
+    heuristic grid) and the reachability labels of the refusal check, as the service does once per map."""
+    t0 = time.perf_counter()
+    planner = planner_for(grid, robot, options)
+    from planner.maps.reachability import prepare
+
+    prepare(planner.clearance, planner.polygon)
+    return time.perf_counter() - t0

@@ -9,7 +9,7 @@ from __future__ import annotations
 import logging
 import math
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, fields, replace
 from typing import Any
 
@@ -51,10 +51,11 @@ class RunRecord:
     """One problem × one planner: a row of the CSV (columns in field order; units in the names).
 
     ``status``: sphereplan ``solved``, ``timeout``, ``no_path``, ``start_refused``, ``goal_refused`` or
-    ``error``; BIT* ``solved`` or ``unsolved``. ``solved`` additionally needs the path to pass the exact
-    polygon check (``valid``). ``time_s``: sphereplan's wall time of the call (success or failure); BIT*'s
-    time to its first solution (the whole limit when it found none). ``first_length_m``: BIT*'s first
-    solution; ``length_m``: the final path (BIT* after the whole limit). ``reference_length_m``: the
+    ``error``; BIT* ``solved``, ``unsolved``, ``crashed`` (its child process died, e.g. a segfault inside
+    OMPL; see :mod:`lab.planning.real.isolated`) or ``error`` (it raised). ``solved`` additionally needs the
+    path to pass the exact polygon check (``valid``). ``time_s``: sphereplan's wall time of the call (success
+    or failure); BIT*'s time to its first solution (the whole limit when it found none). ``first_length_m``:
+    BIT*'s first solution; ``length_m``: the final path (BIT* after its whole budget). ``reference_length_m``: the
     shortest BIT* path among the spaces allowed to sphereplan's motions (Dubins; also Reeds–Shepp when it
     may reverse); ``length_ratio`` = ``length_m`` / it. ``min_clearance_m``: the padded footprint's exact
     distance to the nearest blocked cell or map edge along the path (capped at 1 m); ``reported_clearance_m``:
@@ -176,10 +177,13 @@ def run_sphereplan(problem: RealProblem, grid: OccupancyGrid, robot: RobotProfil
 
 
 def run_reference(problem: RealProblem, grid: OccupancyGrid, robot: RobotProfile, checker: FootprintReferee,
-                  planner: str, time_limit_s: float) -> RunRecord:
+                  planner: str, time_limit_s: float, optimise_s: float | None = None,
+                  on_first: Callable[[float, float], None] | None = None) -> RunRecord:
     """OMPL BIT* (``planner`` = :data:`BIT_DUBINS` or :data:`BIT_REEDS_SHEPP`) at the robot's minimum turning
-    radius with the exact polygon validity check: time to the first solution, then optimising until
-    ``time_limit_s``; motions are checked every half cell of arc length."""
+    radius with the exact polygon validity check: time to the first solution (at most ``time_limit_s``), then
+    optimising until ``optimise_s`` in all (default ``time_limit_s``); motions are checked every half cell of
+    arc length. ``on_first(time_s, length_m)`` is called as soon as the first solution is known (a parent
+    process learns it even if OMPL then crashes while optimising)."""
     from ompl import base as ob
     from ompl import geometric as og
     from ompl import util as ou
@@ -212,9 +216,12 @@ def run_reference(problem: RealProblem, grid: OccupancyGrid, robot: RobotProfile
         log.info("%s %s: no solution in %.1f s", problem.name, planner, time_limit_s)
         return _record(problem, planner, "unsolved", time_limit_s, time_limit_s, message="no solution in time")
     first_length = float(setup.getSolutionPath().length())
+    if on_first is not None:
+        on_first(first, first_length)
     bit.setStopOnSolnImprovement(False)
-    if time_limit_s - first > 0.05:
-        setup.solve(time_limit_s - first)
+    budget = time_limit_s if optimise_s is None else optimise_s
+    if budget - first > 0.05:
+        setup.solve(budget - first)
     path = setup.getSolutionPath()
     length = float(path.length())
     path.interpolate(max(2, math.ceil(length / (0.5 * res)) + 1))

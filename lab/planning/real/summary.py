@@ -28,18 +28,19 @@ Pose = tuple[float, float, float]
 class MapSummary:
     """The per-map line of the table (times in s, lengths as ratios, clearances in m; nan where empty).
 
-    ``bit_solved``: solved by BIT* on either space; ``missed``: solved by the reference for sphereplan's
-    motions (Dubins, plus Reeds–Shepp when it may reverse) but not by sphereplan; ``refused_free``: starts or
-    goals sphereplan called "in collision" although the padded polygon is free there (all drawn poses are);
-    ``unsolved_*``: problems nobody solved and sphereplan did not refuse (``unsolved_time_p50_s``: how long
-    sphereplan took to give up on them: timeout, no path or another planning error); ``time_*``: sphereplan
-    on the problems it solved; ``both_*``: medians over the problems both sphereplan and the reference solved
-    (``both_ratio_*``: sphereplan's time ÷ the faster reference's first-solution time, per problem, median and
-    p90); ``length_ratio_*``: length ÷ the reference's best (final) length; ``first_ratio_median``: length ÷ the
-    shortest BIT* first solution, ``longer_than_first``: the share of problems where sphereplan's path is longer
-    than that; ``expansions_per_s``: sphereplan's expansions ÷ its time, summed over its solved problems;
-    ``clearance_*``: medians over sphereplan's solved problems of the path's least clearance, true (polygon)
-    and as reported.
+    ``bit_solved``: solved by BIT* on either space; ``ref_failed``: BIT* runs whose worker process crashed or that
+    raised (status ``crashed`` / ``error``: reference failures, not solutions); ``missed``: solved by the reference
+    for sphereplan's motions (Dubins, plus Reeds–Shepp when it may reverse) but not by sphereplan; ``refused_free``:
+    starts or goals sphereplan called "in collision" although the padded polygon is free there (all drawn poses
+    are); ``unsolved_*``: problems nobody solved and sphereplan did not refuse (``unsolved_time_p50_s``: how long
+    sphereplan took to give up on them: timeout, no path or another planning error); ``disconnected_time_max_s``:
+    the longest sphereplan took on a problem proven unreachable (its refusal time); ``time_*``: sphereplan on the
+    problems it solved; ``both_*``: medians over the problems both sphereplan and the reference solved
+    (``both_ratio_*``: sphereplan's time ÷ the faster reference's first-solution time, per problem, median and p90);
+    ``length_ratio_*``: length ÷ the reference's best (final) length; ``first_ratio_median``: length ÷ the shortest
+    BIT* first solution, ``longer_than_first``: the share of problems where sphereplan's path is longer than that;
+    ``expansions_per_s``: sphereplan's expansions ÷ its time, summed over its solved problems; ``clearance_*``:
+    medians over sphereplan's solved problems of the path's least clearance, true (polygon) and as reported.
     """
 
     map: str
@@ -51,6 +52,7 @@ class MapSummary:
     bit_dubins: int
     bit_reeds_shepp: int
     bit_solved: int
+    ref_failed: int
     sphereplan: int
     missed: int
     refused_free: int
@@ -65,6 +67,7 @@ class MapSummary:
     both_ratio_p90: float
     unsolved: int
     unsolved_time_p50_s: float
+    disconnected_time_max_s: float
     length_ratio_median: float
     length_ratio_max: float
     first_ratio_median: float
@@ -138,6 +141,7 @@ def _summary(name: str, records: list[RunRecord], checker: FootprintReferee | No
         bit_dubins=sum(1 for g in by_problem.values() if BIT_DUBINS in g and g[BIT_DUBINS].solved),
         bit_reeds_shepp=sum(1 for g in by_problem.values() if BIT_REEDS_SHEPP in g and g[BIT_REEDS_SHEPP].solved),
         bit_solved=sum(1 for g in by_problem.values() if ref_solved(g, set(REFERENCE_SPACES))),
+        ref_failed=sum(1 for r in records if r.planner in REFERENCE_SPACES and r.status in ("crashed", "error")),
         sphereplan=len(solved), missed=missed, refused_free=refused_free,
         timeouts=sum(1 for r in ours if r.status == "timeout"),
         bad_paths=sum(1 for r in ours if r.status == "solved" and not r.valid),
@@ -146,6 +150,7 @@ def _summary(name: str, records: list[RunRecord], checker: FootprintReferee | No
         both_sphereplan_p50_s=_median(both_ours), both_bit_first_p50_s=_median(both_bit),
         both_ratio_median=_median(both_ratio), both_ratio_p90=_p90(both_ratio),
         unsolved=len(unsolved_times), unsolved_time_p50_s=_median(unsolved_times),
+        disconnected_time_max_s=max((r.time_s for r in ours if r.disconnected), default=math.nan),
         length_ratio_median=_median(ratios), length_ratio_max=max(ratios) if ratios else math.nan,
         first_ratio_median=_median(first_ratio),
         longer_than_first=(sum(1 for v in first_ratio if v > 1.0 + 1e-9) / len(first_ratio)) if first_ratio
@@ -159,10 +164,12 @@ def _summary(name: str, records: list[RunRecord], checker: FootprintReferee | No
 
 TABLE_COLUMNS = (
     ("map", "map"), ("cells", "cells"), ("limit s", "time limit given to each planner"),
-    ("setup s", "preprocessing: building sphereplan's planner for the map (once, not in the plan times)"),
+    ("setup s", "preprocessing: sphereplan's planner for the map (distance field, cost and heuristic grids) and "
+                "its reachability labels, once per map, not in the plan times"),
     ("n", "problems"), ("disc", "proven unreachable (disconnected)"),
     ("BIT*D", "solved by BIT* on Dubins"), ("BIT*RS", "solved by BIT* on Reeds–Shepp"),
-    ("BIT*", "solved by BIT* (either)"), ("sp", "solved by sphereplan"),
+    ("BIT*", "solved by BIT* (either)"), ("ref×", "BIT* runs that crashed or raised (reference failures)"),
+    ("sp", "solved by sphereplan"),
     ("missed", "solved by the reference for sphereplan's motions, not by sphereplan"),
     ("refused", "free start/goal refused as in collision"), ("t/o", "sphereplan timeouts"),
     ("bad", "sphereplan paths the exact polygon check rejects"),
@@ -173,6 +180,7 @@ TABLE_COLUMNS = (
     ("x p90", "the same ratio, p90"),
     ("unsolved", "problems nobody solved (sphereplan timed out or found none)"),
     ("give-up s", "sphereplan p50 time to give up on them"),
+    ("disc s", "sphereplan's longest time on a proven-unreachable problem (refusal time)"),
     ("len med", "length ÷ reference best, median"), ("len max", "length ÷ reference best, max"),
     ("÷first", "length ÷ BIT*'s first solution, median"), (">first", "share longer than BIT*'s first solution"),
     ("exp/s", "sphereplan expansions per second of planning time (solved problems)"),
@@ -190,12 +198,14 @@ def format_real_table(summaries: Sequence[MapSummary]) -> str:
     rows = []
     for s in summaries:
         rows.append([
-            s.map, s.cells, _fmt(s.time_limit_s, 0), _fmt(s.setup_s, 2), str(s.problems), str(s.disconnected),
-            str(s.bit_dubins), str(s.bit_reeds_shepp), str(s.bit_solved), str(s.sphereplan), str(s.missed),
+            s.map, s.cells, _fmt(s.time_limit_s, 0), _fmt(s.setup_s, 3), str(s.problems), str(s.disconnected),
+            str(s.bit_dubins), str(s.bit_reeds_shepp), str(s.bit_solved), str(s.ref_failed), str(s.sphereplan),
+            str(s.missed),
             str(s.refused_free), str(s.timeouts), str(s.bad_paths), _fmt(s.time_p50_s, 3), _fmt(s.time_p90_s, 3),
             _fmt(s.time_max_s, 3), _fmt(s.both_sphereplan_p50_s, 3), _fmt(s.both_bit_first_p50_s, 3),
             _fmt(s.both_ratio_median, 2), _fmt(s.both_ratio_p90, 2), str(s.unsolved),
-            _fmt(s.unsolved_time_p50_s, 3), _fmt(s.length_ratio_median, 3), _fmt(s.length_ratio_max, 3),
+            _fmt(s.unsolved_time_p50_s, 3), _fmt(s.disconnected_time_max_s, 3), _fmt(s.length_ratio_median, 3),
+            _fmt(s.length_ratio_max, 3),
             _fmt(s.first_ratio_median, 3), _fmt(s.longer_than_first, 2), _fmt(s.expansions_per_s, 0),
             _fmt(s.clearance_median_m, 3), _fmt(s.reported_clearance_median_m, 3),
         ])

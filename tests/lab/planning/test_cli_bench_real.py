@@ -30,6 +30,18 @@ def test_documented_columns_are_the_csv_columns() -> None:
     assert {"warehouse", "depot", "smoothers_world", "100by100_20"} <= set(real_map_names())
 
 
+def test_the_default_draw_is_at_least_60_problems_over_6_maps() -> None:
+    import argparse
+
+    from service.cli import bench
+
+    parser = argparse.ArgumentParser()
+    bench.add_arguments(parser)
+    args = parser.parse_args(["--suite", "real"])
+    assert len(real_map_names()) >= 6 and args.per_map * len(real_map_names()) >= 60
+    assert args.seed == 0 and args.reference_time is None  # seeded; BIT* gets the documented 3 s budget
+
+
 def test_real_suite_on_a_small_map(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     out_csv, out_png = tmp_path / "real.csv", tmp_path / "real.png"
     code = main(["bench", "--suite", "real", "--real-maps", "smoothers_world", "--per-map", "2", "--seed", "3",
@@ -71,6 +83,7 @@ def test_real_suite_without_reference_and_with_options(tmp_path: Path, capsys: p
     (["--real-maps", "nowhere/map.yaml"], "--real-maps"),
     (["--options", "{not json"], "--options"),
     (["--options", '{"warp": 9}'], "options.warp"),
+    (["--reference-time", "-1"], "--reference-time"),
 ])
 def test_real_suite_bad_input_exits_2(argv: list[str], field: str, capsys: pytest.CaptureFixture[str]) -> None:
     assert main(["bench", "--suite", "real", *argv]) == 2

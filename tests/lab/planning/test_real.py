@@ -249,3 +249,54 @@ def test_csv_round_trip(tmp_path) -> None:
             other = getattr(b, key)
             assert type(other) is type(value), key
             assert (value == other) or (isinstance(value, float) and math.isnan(value) and math.isnan(other)), key
+
+
+def test_a_reference_that_crashes_or_raises_is_recorded_and_the_worker_comes_back() -> None:
+    """Each BIT* run happens in a spawned worker: a segfault (as OMPL's second solve() did with --per-map 6
+    --seed 21) becomes a 'crashed' record keeping the first solution it reported, an exception an 'error'
+    record, and the next run gets a fresh worker."""
+    from lab.planning.real.isolated import ReferenceWorker
+    from tests.lab.planning import reference_stubs
+
+    grid = OccupancyGrid.from_occupied(_room(4.0, 2.0), 0.05, name="tiny")
+    checker = FootprintReferee.for_robot(grid, ROBOT)
+    problem = _problem(grid, (1.0, 1.0, 0.0), (3.0, 1.0, 0.0))
+    with ReferenceWorker(runner=reference_stubs.segfaults_after_first) as worker:
+        rec = worker.run(problem, grid, ROBOT, checker, BIT_DUBINS, 2.0)
+        assert (rec.status, rec.solved, rec.planner) == ("crashed", False, BIT_DUBINS)
+        assert "SIGSEGV" in rec.message and "after its first solution" in rec.message
+        assert (rec.time_s, rec.first_length_m) == (0.012, 7.5)
+        assert worker.crashes == 1
+        again = worker.run(problem, grid, ROBOT, checker, BIT_REEDS_SHEPP, 2.0)  # a new worker, same fate
+        assert again.status == "crashed" and worker.crashes == 2
+    with ReferenceWorker(runner=reference_stubs.raises) as worker:
+        rec = worker.run(problem, grid, ROBOT, checker, BIT_REEDS_SHEPP, 2.0)
+        assert (rec.status, rec.solved) == ("error", False) and "OMPL said no" in rec.message
+        assert worker.crashes == 0
+    with ReferenceWorker(runner=reference_stubs.solves) as worker:
+        first = worker.run(problem, grid, ROBOT, checker, BIT_DUBINS, 2.0)
+        second = worker.run(problem, grid, ROBOT, checker, BIT_REEDS_SHEPP, 2.0)
+        assert first.solved and second.solved and first.message == second.message  # one worker for both runs
+
+
+def test_the_bench_survives_reference_failures(monkeypatch: pytest.MonkeyPatch) -> None:
+    """run_real_bench with a reference that segfaults (Dubins) and raises (Reeds–Shepp): every sphereplan run
+    still happens, the failures are rows with their status, and the table counts them in ``ref×``."""
+    from lab.planning.real import bench, isolated
+    from lab.planning.real.summary import format_real_table
+    from tests.lab.planning import reference_stubs
+
+    class Stubbed(isolated.ReferenceWorker):
+        def __init__(self, ompl_seed: int = 1) -> None:
+            super().__init__(ompl_seed, runner=reference_stubs.by_planner)
+
+    monkeypatch.setattr(bench, "ReferenceWorker", Stubbed)
+    result = bench.run_real_bench(["smoothers_world"], ROBOT, 2, 21, time_limit_s=0.5)
+    by_planner = {p: [r for r in result.records if r.planner == p] for p in (SPHEREPLAN, BIT_DUBINS, BIT_REEDS_SHEPP)}
+    assert [len(v) for v in by_planner.values()] == [2, 2, 2]
+    assert all(r.status == "crashed" and "SIGSEGV" in r.message for r in by_planner[BIT_DUBINS])
+    assert all(r.status == "error" for r in by_planner[BIT_REEDS_SHEPP])
+    assert all(r.status != "crashed" for r in by_planner[SPHEREPLAN])
+    (summary,) = result.summaries
+    assert summary.ref_failed == 4 and summary.bit_solved == 0
+    assert "ref×" in format_real_table(result.summaries)

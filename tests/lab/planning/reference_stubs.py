@@ -1,0 +1,42 @@
+"""Stand-ins for the BIT* reference that misbehave, run in the reference worker by the tests (module-level so a
+spawned process can import them)."""
+
+from __future__ import annotations
+
+import ctypes
+import os
+import signal
+from collections.abc import Callable
+from typing import Any
+
+from lab.planning.real.runs import RunRecord, _record
+
+
+def segfaults_after_first(problem: Any, grid: Any, robot: Any, checker: Any, planner: str, limit: float,
+                          optimise: float | None, on_first: Callable[[float, float], None]) -> RunRecord:
+    """Reports a first solution, then dies of SIGSEGV as OMPL's BIT* did in its second solve()."""
+    on_first(0.012, 7.5)
+    os.kill(os.getpid(), signal.SIGSEGV)
+    ctypes.string_at(0)  # not reached
+    raise AssertionError("unreachable")
+
+
+def raises(problem: Any, grid: Any, robot: Any, checker: Any, planner: str, limit: float,
+           optimise: float | None, on_first: Callable[[float, float], None]) -> RunRecord:
+    raise RuntimeError("OMPL said no")
+
+
+def solves(problem: Any, grid: Any, robot: Any, checker: Any, planner: str, limit: float,
+           optimise: float | None, on_first: Callable[[float, float], None]) -> RunRecord:
+    """A well-behaved stub: 'solves' at once (only the bookkeeping is under test)."""
+    on_first(0.001, 5.0)
+    return _record(problem, planner, "solved", 0.001, limit, valid=True, first_length_m=5.0, length_m=4.5,
+                   message=f"pid {os.getpid()}")
+
+
+def by_planner(problem: Any, grid: Any, robot: Any, checker: Any, planner: str, limit: float,
+               optimise: float | None, on_first: Callable[[float, float], None]) -> RunRecord:
+    """Crashes on Dubins, raises on Reeds–Shepp: what ``run_real_bench`` must survive."""
+    if planner.endswith("dubins"):
+        return segfaults_after_first(problem, grid, robot, checker, planner, limit, optimise, on_first)
+    return raises(problem, grid, robot, checker, planner, limit, optimise, on_first)
