@@ -22,9 +22,10 @@ from typing import Any
 import numpy as np
 
 from planner.angles import check_angle
-from planner.errors import GoalOccupied, InvalidInput, PlanningError, StartOccupied
+from planner.errors import BadEndpoint, GoalOccupied, InvalidInput, PlannerCancelled, PlanningError, StartOccupied
 from planner.hybrid_astar.search import HybridAStar, PlannerOptions, Pose
 from planner.kinematics import wrap
+from planner.live.guide import guided_plan
 from planner.live.live_map import CellRect, LiveMap, MapUpdate
 from planner.live.observations import Observation
 from planner.live.refresh import capped, refresh
@@ -49,12 +50,16 @@ class ReplanPolicy:
     as Nav2's planner server with ``expected_planner_frequency`` 0); ``time_limit_s``: each plan's limit;
     ``arrival_tolerance_m``: the goal counts as reached (no more replans) this close; ``retry_period_s``: after a
     failed plan, a map change triggers a new attempt at most this often (a stopped robot's flickering sensor
-    noise must not replan at the sensor's rate)."""
+    noise must not replan at the sensor's rate); ``guided``: search first with the guide of
+    :mod:`planner.live.guide` (gaps the robot cannot roll through closed) for up to ``guide_share`` of the time
+    limit, then, if that found nothing, with the planner's own heuristic for the rest of it."""
 
     period_s: float | None = None
     time_limit_s: float = 2.0
     arrival_tolerance_m: float = 0.25
     retry_period_s: float = 1.0
+    guided: bool = True
+    guide_share: float = 0.5
 
     def __post_init__(self) -> None:
         if self.period_s is not None and not (math.isfinite(self.period_s) and self.period_s > 0):
@@ -65,6 +70,8 @@ class ReplanPolicy:
             raise InvalidInput("arrival_tolerance_m", "must be a finite number > 0")
         if not (math.isfinite(self.retry_period_s) and self.retry_period_s >= 0):
             raise InvalidInput("retry_period_s", "must be a finite number of seconds ≥ 0")
+        if not (math.isfinite(self.guide_share) and 0 < self.guide_share < 1):
+            raise InvalidInput("guide_share", f"must be in (0, 1), got {self.guide_share!r}")
 
 
 @dataclass(frozen=True)
@@ -72,7 +79,9 @@ class ReplanEvent:
     """One replan: ``seq`` counts the session's plans from 1; ``reason`` is one of :data:`REASONS`;
     ``latency_s`` runs from the trigger (observation applied, pose or goal received) to the new path, and
     splits into ``refresh_s`` (bringing the planner's distance field and heuristic up to date) and
-    ``planning_time_s`` (the search); ``blocked_at`` is the first blocked pose of the old path."""
+    ``planning_time_s`` (the search); ``blocked_at`` is the first blocked pose of the old path; ``method`` says
+    which search gave the answer: ``"guided"`` (:mod:`planner.live.guide`) or ``"ordinary"`` (the planner's own
+    heuristic, alone or after a guided search that found nothing)."""
 
     seq: int
     reason: str
@@ -86,6 +95,7 @@ class ReplanEvent:
     start: Pose
     blocked_at: tuple[float, float] | None = None
     refresh_mode: str = ""
+    method: str = ""
 
     def to_json(self) -> dict[str, Any]:
         return {
@@ -94,7 +104,7 @@ class ReplanEvent:
             "planning_time_s": round(self.planning_time_s, 6), "length_m": self.length_m,
             "start": {"x": self.start[0], "y": self.start[1], "yaw": self.start[2]},
             "blocked_at": None if self.blocked_at is None else {"x": self.blocked_at[0], "y": self.blocked_at[1]},
-            "refresh_mode": self.refresh_mode,
+            "refresh_mode": self.refresh_mode, "method": self.method,
         }
 
 
@@ -273,25 +283,43 @@ class LiveSession:
         self._seq += 1
         self._last_plan_t = self.clock()
         start = self.pose
+        limit = self.policy.time_limit_s if time_limit_s is None else time_limit_s
+        t_search = time.perf_counter()
+        method = "ordinary"
         try:
-            limit = self.policy.time_limit_s if time_limit_s is None else time_limit_s
-            result = self._planner.plan(start, self.goal, Termination(limit))
+            result, method = self._search(start, self.goal, limit)
         except PlanningError as exc:
             self.path = None
             self._progress = _Progress()
             event = ReplanEvent(self._seq, reason, False, exc.code, exc.msg, time.perf_counter() - t0, refresh_s,
-                                exc.planning_time_s, 0.0, start, blocked_at, mode)
+                                time.perf_counter() - t_search, 0.0, start, blocked_at, mode, method)
             self.last_failure = event
         else:
             self.path = result
             self._progress = _Progress()
             self.last_failure = None
             event = ReplanEvent(self._seq, reason, True, 0, "", time.perf_counter() - t0, refresh_s,
-                                result.planning_time_s, result.length_m, start, blocked_at, mode)
+                                time.perf_counter() - t_search, result.length_m, start, blocked_at, mode, method)
         self.events.append(event)
         for listener in list(self.listeners):
             listener(event)
         return event
+
+    def _search(self, start: Pose, goal: Pose, limit: float) -> tuple[PlanResult, str]:
+        """One search within ``limit`` seconds in all: guided first (when the policy says so), then ordinary.
+        Returns the path and the method that found it; raises the last search's error."""
+        assert self._planner is not None
+        if not self.policy.guided:
+            return self._planner.plan(start, goal, Termination(limit)), "ordinary"
+        t0 = time.perf_counter()
+        try:
+            return guided_plan(self._planner, start, goal, Termination(limit * self.policy.guide_share)), "guided"
+        except (BadEndpoint, PlannerCancelled, InvalidInput):
+            raise  # the ordinary search would say the same
+        except PlanningError:
+            pass  # proves nothing: the guide is not admissible everywhere
+        rest = max(limit - (time.perf_counter() - t0), limit * (1.0 - self.policy.guide_share))
+        return self._planner.plan(start, goal, Termination(rest)), "ordinary"
 
     def status(self) -> dict[str, Any]:
         """The session's state as JSON: pose, goal, path length and progress, the last replan, map knowledge."""
