@@ -20,6 +20,7 @@ out). Every random draw (sensor noise) comes from ``seed``.
 from __future__ import annotations
 
 import math
+from collections import Counter
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -257,6 +258,9 @@ def explore(known: OccupancyGrid, world: OccupancyGrid, robot: RobotProfile, sta
         "replan_latency_p50_s": _percentile(latencies, 50),
         "replan_latency_p95_s": _percentile(latencies, 95),
         "replan_latency_max_s": max(latencies) if latencies else None,
+        "replan_reasons": dict(Counter(e.reason for e in replans)),
+        "replans_failed": sum(not e.ok for e in replans),
+        "replan_methods": dict(Counter(e.method for e in replans if e.ok)),
         "map_update_p50_s": _percentile(update_s, 50),
         "map_update_p95_s": _percentile(update_s, 95),
         "sweeps": len(update_s),
