@@ -97,3 +97,20 @@ def test_timer_replans_and_goal_needs_a_pose() -> None:
     with pytest.raises(InvalidInput) as err:
         session.set_pose((1.0, 1.0, 100.0))
     assert err.value.field == "pose.yaw"
+
+
+def test_live_options_default_and_yield_to_given_ones() -> None:
+    from planner.closed_loop.explore import ExploreOptions
+    from planner.live import live_options
+    from planner.live.session import LIVE_OPTION_DEFAULTS
+
+    session = LiveSession(LiveMap(corridor()), ROBOT)
+    assert session.options.allow_unknown is True
+    assert session.options.greed == LIVE_OPTION_DEFAULTS["greed"] != PlannerOptions().greed
+    given = live_options({"allow_unknown": False, "n_rolls": 9})
+    assert (given.allow_unknown, given.n_rolls, given.greed) == (False, 9, LIVE_OPTION_DEFAULTS["greed"])
+    assert live_options({"greed": 0.5}).greed == 0.5
+    with pytest.raises(InvalidInput) as err:
+        live_options({"greedy": 1.0})
+    assert err.value.field == "options.greedy"
+    assert ExploreOptions().planner == live_options()
