@@ -18,7 +18,12 @@ keep the ordinary multipliers, a guided search that fails proves nothing, and th
 ordinary search (:meth:`planner.live.session.LiveSession.replan`). A path a guided search finds is checked
 exactly as any other: only the order of expansion changes, never the collision check.
 
-The guide is kept per planner and patched with the ordinary multipliers by :mod:`planner.live.refresh`.
+A gap can also be wide enough for the robot and still a trap: a half-seen wall's end 0.75 m from a pillar's
+corner, then a 0.85 m slot behind it, which no turn of a 1.1 m radius threads (``garage-west-aisle``). A guide
+``widen_m`` wider (:data:`WIDE_M`) closes those as well; the session tries it after the plain guide, with a small
+expansion budget each (:class:`planner.live.session.ReplanPolicy`).
+
+The guides are kept per planner and patched with the ordinary multipliers by :mod:`planner.live.refresh`.
 """
 
 from __future__ import annotations
@@ -37,7 +42,10 @@ from planner.termination import Termination
 CENTRE_SLACK_CELLS = 1.63
 """The discretisation slack of the planner's own centre threshold (inscribed radius − 1.63 cells), reused."""
 
-_guides: weakref.WeakKeyDictionary[HybridAStar, np.ndarray] = weakref.WeakKeyDictionary()
+WIDE_M = 0.15
+"""How much wider than the footprint the second guide's gaps must be (m)."""
+
+_guides: weakref.WeakKeyDictionary[HybridAStar, dict[float, np.ndarray]] = weakref.WeakKeyDictionary()
 
 
 def lateral_half_width_m(polygon: np.ndarray) -> float:
@@ -46,34 +54,35 @@ def lateral_half_width_m(polygon: np.ndarray) -> float:
     return float(min(y.max(), -y.min()))
 
 
-def guide_threshold_m(planner: HybridAStar) -> float:
-    """The guide's passability threshold on the stored clearance (m); never below the planner's own."""
-    return max(planner.centre_threshold_m,
-               lateral_half_width_m(planner.polygon) - CENTRE_SLACK_CELLS * planner.grid.resolution_m)
+def guide_threshold_m(planner: HybridAStar, widen_m: float = 0.0) -> float:
+    """The guide's passability threshold on the stored clearance (m), ``widen_m`` above the lateral half-width
+    less the slack; never below the planner's own."""
+    return max(planner.centre_threshold_m, lateral_half_width_m(planner.polygon) + widen_m
+               - CENTRE_SLACK_CELLS * planner.grid.resolution_m)
 
 
-def _coarse(planner: HybridAStar, fine: np.ndarray) -> np.ndarray:
+def _coarse(planner: HybridAStar, fine: np.ndarray, widen_m: float) -> np.ndarray:
     o = planner.options
-    return coarse_cost_grid(fine, guide_threshold_m(planner), planner.footprint.radius_m,
+    return coarse_cost_grid(fine, guide_threshold_m(planner, widen_m), planner.footprint.radius_m,
                             max(o.proximity_range_m, planner.robot.preferred_clearance_m), o.cost_penalty,
                             planner.heuristic_factor)
 
 
-def guide_mult(planner: HybridAStar) -> np.ndarray:
-    """The planner's guide multipliers (same shape as ``planner.holonomic_mult``), built on first use."""
-    mult = _guides.get(planner)
+def guide_mult(planner: HybridAStar, widen_m: float = 0.0) -> np.ndarray:
+    """The planner's guide multipliers (same shape as ``planner.holonomic_mult``) for gaps ``widen_m`` wider than
+    the footprint, built on first use and then kept up to date by :func:`patch_guide`."""
+    guides = _guides.setdefault(planner, {})
+    mult = guides.get(widen_m)
     if mult is None:
-        mult = _coarse(planner, planner.clearance.clearance)
-        _guides[planner] = mult
+        mult = guides[widen_m] = _coarse(planner, planner.clearance.clearance, widen_m)
     return mult
 
 
 def patch_guide(planner: HybridAStar, cy0: int, cy1: int, cx0: int, cx1: int, fine: np.ndarray) -> None:
-    """Recompute the guide on coarse cells [cy0, cy1) × [cx0, cx1) from their fine clearance ``fine`` (only if the
-    planner has a guide yet)."""
-    mult = _guides.get(planner)
-    if mult is not None:
-        mult[cy0:cy1, cx0:cx1] = _coarse(planner, fine)
+    """Recompute the planner's guides (those built so far) on coarse cells [cy0, cy1) × [cx0, cx1) from their fine
+    clearance ``fine``."""
+    for widen_m, mult in _guides.get(planner, {}).items():
+        mult[cy0:cy1, cx0:cx1] = _coarse(planner, fine, widen_m)
 
 
 def _open_around(planner: HybridAStar, mult: np.ndarray, xy: tuple[float, float], radius_m: float) -> None:
@@ -90,11 +99,12 @@ def _open_around(planner: HybridAStar, mult: np.ndarray, xy: tuple[float, float]
         mult[y0:y1, x0:x1] = planner.holonomic_mult[y0:y1, x0:x1]
 
 
-def guided_plan(planner: HybridAStar, start: Pose, goal: Pose, termination: Termination) -> PlanResult:
-    """Plan with the guide in place of the holonomic multipliers (around the start and the goal, within the
-    footprint's reach plus two coarse cells, the ordinary ones); the planner is left as it was. Raises the
-    planner's errors like :meth:`HybridAStar.plan`."""
-    mult = guide_mult(planner).copy()
+def guided_plan(planner: HybridAStar, start: Pose, goal: Pose, termination: Termination,
+                widen_m: float = 0.0) -> PlanResult:
+    """Plan with the guide (``widen_m``) in place of the holonomic multipliers (around the start and the goal,
+    within the footprint's reach plus two coarse cells, the ordinary ones); the planner is left as it was.
+    Raises the planner's errors like :meth:`HybridAStar.plan`."""
+    mult = guide_mult(planner, widen_m).copy()
     reach = float(np.hypot(*np.asarray(planner.polygon, float).T).max()) + \
         2.0 * planner.grid.resolution_m * planner.heuristic_factor
     for xy in (start[:2], goal[:2]):
@@ -107,4 +117,4 @@ def guided_plan(planner: HybridAStar, start: Pose, goal: Pose, termination: Term
         planner.holonomic_mult, planner._heuristics = saved
 
 
-__all__ = ["guide_mult", "guide_threshold_m", "guided_plan", "lateral_half_width_m", "patch_guide"]
+__all__ = ["WIDE_M", "guide_mult", "guide_threshold_m", "guided_plan", "lateral_half_width_m", "patch_guide"]

@@ -25,7 +25,7 @@ from planner.angles import check_angle
 from planner.errors import BadEndpoint, GoalOccupied, InvalidInput, PlannerCancelled, PlanningError, StartOccupied
 from planner.hybrid_astar.search import HybridAStar, PlannerOptions, Pose
 from planner.kinematics import wrap
-from planner.live.guide import guided_plan
+from planner.live.guide import WIDE_M, guided_plan
 from planner.live.live_map import CellRect, LiveMap, MapUpdate
 from planner.live.observations import Observation
 from planner.live.refresh import capped, refresh
@@ -63,15 +63,18 @@ class ReplanPolicy:
     as Nav2's planner server with ``expected_planner_frequency`` 0); ``time_limit_s``: each plan's limit;
     ``arrival_tolerance_m``: the goal counts as reached (no more replans) this close; ``retry_period_s``: after a
     failed plan, a map change triggers a new attempt at most this often (a stopped robot's flickering sensor
-    noise must not replan at the sensor's rate); ``guided``: search first with the guide of
-    :mod:`planner.live.guide` (gaps the robot cannot roll through closed) for up to ``guide_share`` of the time
-    limit, then, if that found nothing, with the planner's own heuristic for the rest of it."""
+    noise must not replan at the sensor's rate); ``guided``: search first with the guides of
+    :mod:`planner.live.guide` (gaps the robot cannot roll through closed; then gaps up to ``guide_levels_m``
+    wider), each for at most ``guide_expansions`` expansions and all of them for at most ``guide_share`` of the
+    time limit, then, if they found nothing, with the planner's own heuristic for the rest of it."""
 
     period_s: float | None = None
     time_limit_s: float = 2.0
     arrival_tolerance_m: float = 0.25
     retry_period_s: float = 1.0
     guided: bool = True
+    guide_levels_m: tuple[float, ...] = (0.0, WIDE_M)
+    guide_expansions: int = 6000
     guide_share: float = 0.5
 
     def __post_init__(self) -> None:
@@ -85,6 +88,10 @@ class ReplanPolicy:
             raise InvalidInput("retry_period_s", "must be a finite number of seconds ≥ 0")
         if not (math.isfinite(self.guide_share) and 0 < self.guide_share < 1):
             raise InvalidInput("guide_share", f"must be in (0, 1), got {self.guide_share!r}")
+        if not all(math.isfinite(w) and 0 <= w <= 1 for w in self.guide_levels_m):
+            raise InvalidInput("guide_levels_m", f"must be widenings in [0, 1] m, got {self.guide_levels_m!r}")
+        if not 0 < self.guide_expansions <= 1_000_000:
+            raise InvalidInput("guide_expansions", f"must be in [1, 1000000], got {self.guide_expansions!r}")
 
 
 @dataclass(frozen=True)
@@ -93,8 +100,9 @@ class ReplanEvent:
     ``latency_s`` runs from the trigger (observation applied, pose or goal received) to the new path, and
     splits into ``refresh_s`` (bringing the planner's distance field and heuristic up to date) and
     ``planning_time_s`` (the search); ``blocked_at`` is the first blocked pose of the old path; ``method`` says
-    which search gave the answer: ``"guided"`` (:mod:`planner.live.guide`) or ``"ordinary"`` (the planner's own
-    heuristic, alone or after a guided search that found nothing)."""
+    which search gave the answer: ``"guided"`` (:mod:`planner.live.guide`), ``"guided+0.15m"`` (the guide for gaps
+    that much wider) or ``"ordinary"`` (the planner's own heuristic, alone or after guided searches that found
+    nothing)."""
 
     seq: int
     reason: str
@@ -318,19 +326,25 @@ class LiveSession:
         return event
 
     def _search(self, start: Pose, goal: Pose, limit: float) -> tuple[PlanResult, str]:
-        """One search within ``limit`` seconds in all: guided first (when the policy says so), then ordinary.
-        Returns the path and the method that found it; raises the last search's error."""
+        """One search within ``limit`` seconds in all: the guided ones first (when the policy says so), then the
+        ordinary one. Returns the path and the method that found it; raises the last search's error."""
         assert self._planner is not None
-        if not self.policy.guided:
-            return self._planner.plan(start, goal, Termination(limit)), "ordinary"
+        pol = self.policy
         t0 = time.perf_counter()
-        try:
-            return guided_plan(self._planner, start, goal, Termination(limit * self.policy.guide_share)), "guided"
-        except (BadEndpoint, PlannerCancelled, InvalidInput):
-            raise  # the ordinary search would say the same
-        except PlanningError:
-            pass  # proves nothing: the guide is not admissible everywhere
-        rest = max(limit - (time.perf_counter() - t0), limit * (1.0 - self.policy.guide_share))
+        if pol.guided:
+            for widen in pol.guide_levels_m:
+                budget = limit * pol.guide_share - (time.perf_counter() - t0)
+                if budget <= 0:
+                    break
+                try:
+                    result = guided_plan(self._planner, start, goal,
+                                         Termination(budget, max_iterations=pol.guide_expansions), widen)
+                except (BadEndpoint, PlannerCancelled, InvalidInput):
+                    raise  # the ordinary search would say the same
+                except PlanningError:
+                    continue  # proves nothing: a guide is not admissible everywhere
+                return result, "guided" if widen == 0 else f"guided+{widen:g}m"
+        rest = max(limit - (time.perf_counter() - t0), limit * (1.0 - pol.guide_share))
         return self._planner.plan(start, goal, Termination(rest)), "ordinary"
 
     def status(self) -> dict[str, Any]:

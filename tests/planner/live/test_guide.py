@@ -8,11 +8,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from planner.errors import NoValidPathFound, PlannerTimedOut
+from planner.errors import InvalidInput, NoValidPathFound, PlannerTimedOut
 from planner.hybrid_astar.search import HybridAStar, PlannerOptions
 from planner.live import LiveMap, LiveSession, ObstacleLayerParams, PointObservation, ReplanPolicy
 from planner.live import session as session_module
-from planner.live.guide import guide_mult, guide_threshold_m, guided_plan, lateral_half_width_m
+from planner.live.guide import WIDE_M, guide_mult, guide_threshold_m, guided_plan, lateral_half_width_m
 from planner.live.refresh import capped, refresh
 from planner.maps.clearance import inscribed_radius, least_footprint_distance
 from planner.occupancy import OccupancyGrid
@@ -86,11 +86,50 @@ def test_session_replans_guided_and_falls_back(monkeypatch: pytest.MonkeyPatch) 
     assert ReplanPolicy(guided=False).guided is False
 
 
+def test_wide_guide_closes_gaps_a_little_wider_than_the_robot() -> None:
+    occ = np.zeros((200, 400), dtype=bool)
+    occ[[0, -1], :] = True
+    occ[:, [0, -1]] = True
+    occ[0:20, 200:202] = True
+    occ[37:160, 200:202] = True  # a 0.85 m gap: wide enough for the footprint's 0.74 m, not 0.15 m more on each side
+    planner = HybridAStar(OccupancyGrid.from_occupied(occ, RES), ROBOT, PlannerOptions(allow_unknown=True))
+    f = planner.heuristic_factor
+    gap = (int(1.4 / RES) // f, 200 // f)
+    assert guide_threshold_m(planner, WIDE_M) == pytest.approx(guide_threshold_m(planner) + WIDE_M)
+    assert np.isfinite(guide_mult(planner)[gap]) and np.isinf(guide_mult(planner, WIDE_M)[gap])
+    assert np.all(guide_mult(planner, WIDE_M) >= guide_mult(planner))
+
+
+def test_session_tries_the_guides_in_order_with_an_expansion_budget(monkeypatch: pytest.MonkeyPatch) -> None:
+    calls: list[tuple[float, int]] = []
+    real = session_module.guided_plan
+
+    def first_fails(planner: HybridAStar, start: object, goal: object, termination: Termination,
+                    widen_m: float = 0.0) -> object:
+        calls.append((widen_m, termination.max_iterations))
+        if widen_m == 0.0:
+            raise NoValidPathFound("the plain guide's search found nothing", planning_time_s=0.0)
+        return real(planner, start, goal, termination, widen_m)  # type: ignore[arg-type]
+
+    monkeypatch.setattr(session_module, "guided_plan", first_fails)
+    policy = ReplanPolicy(time_limit_s=30.0, guide_expansions=4000)
+    session = LiveSession(LiveMap(gap_map()), ROBOT, policy=policy)
+    session.set_pose(START)
+    event = session.set_goal(GOAL)
+    assert calls == [(0.0, 4000), (WIDE_M, 4000)]
+    assert event.ok and event.method == f"guided+{WIDE_M:g}m"
+    with pytest.raises(InvalidInput):
+        ReplanPolicy(guide_levels_m=(0.0, -0.1))
+    with pytest.raises(InvalidInput):
+        ReplanPolicy(guide_expansions=0)
+
+
 def test_guide_is_patched_like_a_rebuilt_one() -> None:
     live = LiveMap(gap_map(), ObstacleLayerParams.for_robot(ROBOT))
     opts = PlannerOptions(allow_unknown=True)
     planner = capped(HybridAStar(live.grid, ROBOT, opts))
-    guide_mult(planner)  # built before the change: refresh must patch it
+    guide_mult(planner)  # built before the change: refresh must patch them
+    guide_mult(planner, WIDE_M)
     ys = np.arange(3.0, 6.0, 0.02)
     upd = live.apply(PointObservation(np.stack([np.full_like(ys, 15.0), ys, np.full_like(ys, 0.3)], axis=1),
                                       np.array([12.0, 4.5, 0.3])))
@@ -98,8 +137,10 @@ def test_guide_is_patched_like_a_rebuilt_one() -> None:
     planner, _, how = refresh(planner, list(upd.regions), max_share=1.0)
     assert how == "patched"
     rebuilt = capped(HybridAStar(live.snapshot(), ROBOT, opts))
-    a, b = guide_mult(planner), guide_mult(rebuilt)
-    assert np.array_equal(np.isinf(a), np.isinf(b))
-    finite = np.isfinite(b)
-    assert np.allclose(a[finite], b[finite])
+    for widen in (0.0, WIDE_M):
+        a, b = guide_mult(planner, widen), guide_mult(rebuilt, widen)
+        assert np.array_equal(np.isinf(a), np.isinf(b))
+        finite = np.isfinite(b)
+        assert np.allclose(a[finite], b[finite])
+    a = guide_mult(planner)
     assert np.isinf(a[int(4.5 / RES) // planner.heuristic_factor, int(15.0 / RES) // planner.heuristic_factor])
