@@ -16,7 +16,7 @@ import math
 import time
 from collections import deque
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
@@ -63,7 +63,11 @@ class ReplanPolicy:
     as Nav2's planner server with ``expected_planner_frequency`` 0); ``time_limit_s``: each plan's limit;
     ``arrival_tolerance_m``: the goal counts as reached (no more replans) this close; ``retry_period_s``: after a
     failed plan, a map change triggers a new attempt at most this often (a stopped robot's flickering sensor
-    noise must not replan at the sensor's rate); ``guided``: search first with the guides of
+    noise must not replan at the sensor's rate); ``splice_lead_s``: a robot rolling along its path is not
+    replanned from where it is (a new path may start against its motion, and it cannot stop on the spot) but from
+    the state of its path it reaches after rolling ``splice_lead_s`` at its speed and then braking, when that is
+    short of the blockage; the new path keeps the old one up to there (0 = always from the current pose);
+    ``guided``: search first with the guides of
     :mod:`planner.live.guide` (gaps the robot cannot roll through closed; then gaps up to ``guide_levels_m``
     wider), each for at most ``guide_expansions`` expansions and all of them for at most ``guide_share`` of the
     time limit, then, if they found nothing, with the planner's own heuristic for the rest of it."""
@@ -72,6 +76,7 @@ class ReplanPolicy:
     time_limit_s: float = 2.0
     arrival_tolerance_m: float = 0.25
     retry_period_s: float = 1.0
+    splice_lead_s: float = 0.5
     guided: bool = True
     guide_levels_m: tuple[float, ...] = (0.0, WIDE_M)
     guide_expansions: int = 6000
@@ -86,6 +91,8 @@ class ReplanPolicy:
             raise InvalidInput("arrival_tolerance_m", "must be a finite number > 0")
         if not (math.isfinite(self.retry_period_s) and self.retry_period_s >= 0):
             raise InvalidInput("retry_period_s", "must be a finite number of seconds ≥ 0")
+        if not (math.isfinite(self.splice_lead_s) and 0 <= self.splice_lead_s <= 10):
+            raise InvalidInput("splice_lead_s", f"must be in [0, 10] s, got {self.splice_lead_s!r}")
         if not (math.isfinite(self.guide_share) and 0 < self.guide_share < 1):
             raise InvalidInput("guide_share", f"must be in (0, 1), got {self.guide_share!r}")
         if not all(math.isfinite(w) and 0 <= w <= 1 for w in self.guide_levels_m):
@@ -102,7 +109,8 @@ class ReplanEvent:
     ``planning_time_s`` (the search); ``blocked_at`` is the first blocked pose of the old path; ``method`` says
     which search gave the answer: ``"guided"`` (:mod:`planner.live.guide`), ``"guided+0.15m"`` (the guide for gaps
     that much wider) or ``"ordinary"`` (the planner's own heuristic, alone or after guided searches that found
-    nothing)."""
+    nothing); ``spliced_m`` is how much of the old path, from the robot on, the new one keeps (``start`` is then
+    the state it was planned from, at the end of that stretch)."""
 
     seq: int
     reason: str
@@ -117,6 +125,7 @@ class ReplanEvent:
     blocked_at: tuple[float, float] | None = None
     refresh_mode: str = ""
     method: str = ""
+    spliced_m: float = 0.0
 
     def to_json(self) -> dict[str, Any]:
         return {
@@ -125,8 +134,26 @@ class ReplanEvent:
             "planning_time_s": round(self.planning_time_s, 6), "length_m": self.length_m,
             "start": {"x": self.start[0], "y": self.start[1], "yaw": self.start[2]},
             "blocked_at": None if self.blocked_at is None else {"x": self.blocked_at[0], "y": self.blocked_at[1]},
-            "refresh_mode": self.refresh_mode, "method": self.method,
+            "refresh_mode": self.refresh_mode, "method": self.method, "spliced_m": round(self.spliced_m, 3),
         }
+
+
+SPLICE_CLEAR_M = 1.0
+"""A replan is spliced onto the old path only where that leaves at least this much of it before the blockage."""
+
+
+def _spliced(prefix: np.ndarray, result: PlanResult) -> PlanResult:
+    """``result`` (planned from the last state of ``prefix``) with ``prefix`` (the old path's states from the robot
+    on) put in front of it, time and arc length counted from the robot."""
+    head = prefix.copy()
+    head[:, 5] -= head[0, 5]
+    head[:, 6] -= head[0, 6]
+    tail = result.states[1:].copy()
+    tail[:, 5] += head[-1, 5]
+    tail[:, 6] += head[-1, 6]
+    x, y, yaw = (float(v) for v in head[0, :3])
+    return replace(result, states=np.vstack([head, tail]), start=(x, y, yaw),
+                   extra={**result.extra, "spliced_m": float(head[-1, 6])})
 
 
 def _pose(value: Any, field_name: str) -> Pose:
@@ -177,6 +204,7 @@ class LiveSession:
         self._last_plan_t = -math.inf
         self._sync_s = 0.0  # refresh time not yet reported by a replan
         self._sync_mode = ""
+        self._blocked: int | None = None  # the blocked state of the path, for the replan it triggers
 
     # ------------------------------------------------------------------ inputs
 
@@ -225,6 +253,7 @@ class LiveSession:
         if blocked is None:
             return update, None
         xy = (float(self.path.states[blocked, 0]), float(self.path.states[blocked, 1]))
+        self._blocked = blocked
         return update, self.replan("blocked", t0, blocked_at=xy)
 
     # ------------------------------------------------------------------ state
@@ -306,8 +335,28 @@ class LiveSession:
         limit = self.policy.time_limit_s if time_limit_s is None else time_limit_s
         t_search = time.perf_counter()
         method = "ordinary"
+        blocked, self._blocked = self._blocked, None
+        splice = self._splice_index(blocked) if reason in ("blocked", "timer") else None
+        spliced_m = 0.0
         try:
-            result, method = self._search(start, self.goal, limit)
+            if splice is not None:
+                assert self.path is not None
+                old, i = self.path.states, self._progress.index
+                try:
+                    x, y, yaw = (float(v) for v in old[splice, :3])
+                    result, method = self._search((x, y, yaw), self.goal, limit)
+                except (BadEndpoint, PlannerCancelled, InvalidInput):
+                    raise
+                except PlanningError:
+                    splice = None  # from the splice point nothing was found: try from where the robot is
+                    left = max(limit - (time.perf_counter() - t_search), 0.25 * limit)
+                    result, method = self._search(start, self.goal, left)
+                else:
+                    start = result.start
+                    result = _spliced(old[i:splice + 1], result)
+                    spliced_m = float(old[splice, 6] - old[i, 6])
+            else:
+                result, method = self._search(start, self.goal, limit)
         except PlanningError as exc:
             self.path = None
             self._progress = _Progress()
@@ -319,11 +368,31 @@ class LiveSession:
             self._progress = _Progress()
             self.last_failure = None
             event = ReplanEvent(self._seq, reason, True, 0, "", time.perf_counter() - t0, refresh_s,
-                                time.perf_counter() - t_search, result.length_m, start, blocked_at, mode, method)
+                                time.perf_counter() - t_search, result.length_m, start, blocked_at, mode, method,
+                                spliced_m)
         self.events.append(event)
         for listener in list(self.listeners):
             listener(event)
         return event
+
+    def _splice_index(self, blocked: int | None) -> int | None:
+        """The state of the path to plan from instead of the current pose (see ``ReplanPolicy.splice_lead_s``):
+        ``splice_lead_s`` at the path's speed at the robot, then the braking distance, ahead; None when the robot
+        is (nearly) still, or that state is less than :data:`SPLICE_CLEAR_M` short of the blocked one."""
+        if self.path is None or self.policy.splice_lead_s <= 0:
+            return None
+        st = self.path.states
+        i = self._progress.index
+        v = abs(float(st[i, 4]))
+        ahead = v * self.policy.splice_lead_s + v * v / (2.0 * self.robot.max_accel_m_s2)
+        if ahead < 0.05:
+            return None
+        end = float(st[-1, 6]) if blocked is None else float(st[blocked, 6]) - SPLICE_CLEAR_M
+        target = float(st[i, 6]) + ahead
+        if target > end:
+            return None
+        k = int(np.searchsorted(st[:, 6], target))
+        return k if i < k < len(st) - 1 else None
 
     def _search(self, start: Pose, goal: Pose, limit: float) -> tuple[PlanResult, str]:
         """One search within ``limit`` seconds in all: the guided ones first (when the policy says so), then the
