@@ -378,7 +378,8 @@ class LiveSession:
     def _splice_index(self, blocked: int | None) -> int | None:
         """The state of the path to plan from instead of the current pose (see ``ReplanPolicy.splice_lead_s``):
         ``splice_lead_s`` at the path's speed at the robot, then the braking distance, ahead; None when the robot
-        is (nearly) still, or that state is less than :data:`SPLICE_CLEAR_M` short of the blocked one."""
+        is (nearly) still, the path stops on the way there, or that state is less than :data:`SPLICE_CLEAR_M`
+        short of the blocked one."""
         if self.path is None or self.policy.splice_lead_s <= 0:
             return None
         st = self.path.states
@@ -392,7 +393,11 @@ class LiveSession:
         if target > end:
             return None
         k = int(np.searchsorted(st[:, 6], target))
-        return k if i < k < len(st) - 1 else None
+        if not i < k < len(st) - 1:
+            return None
+        # only across a stretch the robot rolls without stopping: a stop (a cusp, or the roll-in at the head of a
+        # path spliced before) is where a new path may start from the robot itself, and splices must not pile up
+        return k if bool(np.all(np.abs(st[i:k + 1, 4]) > 1e-6)) else None
 
     def _search(self, start: Pose, goal: Pose, limit: float) -> tuple[PlanResult, str]:
         """One search within ``limit`` seconds in all: the guided ones first (when the policy says so), then the

@@ -139,3 +139,20 @@ def test_a_still_robot_or_no_lead_replans_from_the_current_pose() -> None:
         assert event.start == pose and event.spliced_m == 0.0
     with pytest.raises(InvalidInput):
         ReplanPolicy(splice_lead_s=-1.0)
+
+
+def test_no_splice_across_a_stop_on_the_path() -> None:
+    """A stretch with a stop on it (a cusp, or the roll-in at the head of a path spliced before) is not kept:
+    splices must not pile up, so the replan starts from the robot."""
+    live = LiveMap(corridor(), ObstacleLayerParams.for_robot(ROBOT))
+    session = LiveSession(live, ROBOT, policy=ReplanPolicy(time_limit_s=5.0))
+    session.set_pose(START)
+    session.set_goal(GOAL)
+    session.set_pose((3.0, 5.0, 0.0))
+    assert session.path is not None
+    states = session.path.states
+    i = session._progress.index
+    stop = i + int(np.searchsorted(states[i:, 6], states[i, 6] + 0.2))
+    states[stop, 4] = 0.0
+    _, event = session.observe(PointObservation(wall_points(10.0, 0.05, 7.5), np.array([4.0, 5.0, 0.3])))
+    assert event is not None and event.ok and event.spliced_m == 0.0 and event.start == (3.0, 5.0, 0.0)
