@@ -4,7 +4,9 @@
 Per world: whether the true world has a path (planned with full knowledge), the outcome (``reached`` /
 ``no_path`` / ``collided`` / ``timeout``) and whether it is the right one (reached where a path exists,
 ``no_path`` and no collision where none does), replans and their latency percentiles, the live-map update
-time per 10 m sensor sweep, and the driven length over the length planned with full knowledge. The summary
+time per 10 m sensor sweep, the driven length over the length planned with full knowledge, and why it replanned
+(``blocked``, ``request``: a timed-out search retried while stopped, ``map_changed``: a failed plan retried after
+the map changed, ``timer``) with the number of replans that found no path in brackets. The summary
 line pools the replan latencies and sweep times of all worlds (and of the 100 m field and the garage apart,
 the issue's two targets). Wall times depend on the machine's load: compare within a run.
 """
@@ -81,13 +83,21 @@ def _ms1(v: float | None) -> str:
     return "—" if v is None else f"{1e3 * v:.1f}"
 
 
+def _why(m: dict[str, Any]) -> str:
+    """The replans' reasons with their counts (``blocked 3, request 1``) and how many of them failed."""
+    reasons = m.get("replan_reasons") or {}
+    text = ", ".join(f"{k} {v}" for k, v in sorted(reasons.items())) or "—"
+    failed = m.get("replans_failed") or 0
+    return f"{text} ({failed})" if failed else text
+
+
 def _pct(values: list[float], q: float) -> float | None:
     return float(np.percentile(values, q)) if values else None
 
 
 def format_table(rows: list[SweepRow], sweep_s: dict[str, list[float]]) -> str:
     head = (f"{'world':<26} {'path?':>5} {'outcome':>8} {'ok':>3} {'replans':>7} {'p50 ms':>7} {'p95 ms':>7} "
-            f"{'upd ms':>6} {'driven m':>8} {'known m':>8} {'ratio':>6} {'clear m':>7} {'wall s':>6}")
+            f"{'upd ms':>6} {'driven m':>8} {'known m':>8} {'ratio':>6} {'clear m':>7} {'wall s':>6}  why (failed)")
     lines = [head, "-" * len(head)]
     for r in rows:
         m = r.metrics
@@ -98,7 +108,7 @@ def format_table(rows: list[SweepRow], sweep_s: dict[str, list[float]]) -> str:
             f"{_ms(m['map_update_p50_s']):>6} {m['length_m']:>8.1f} "
             f"{(m['length_known_world_m'] or 0):>8.1f} "
             f"{ratio:>6} {m['min_clearance_m']:>7.2f} "
-            f"{r.wall_s:>6.0f}")
+            f"{r.wall_s:>6.0f}  {_why(m)}")
     lines.append("-" * len(head))
     reached = sum(r.outcome == "reached" for r in rows)
     collided = sum(bool(r.metrics["collided"]) for r in rows)

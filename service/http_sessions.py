@@ -33,8 +33,7 @@ from fastapi import Path as PathParam
 from fastapi.responses import JSONResponse, Response, StreamingResponse
 
 from planner.errors import InvalidInput, NoValidPathFound
-from planner.hybrid_astar.search import PlannerOptions
-from planner.live import ObstacleLayerParams, ReplanEvent, ReplanPolicy
+from planner.live import ObstacleLayerParams, ReplanEvent, ReplanPolicy, live_options
 from planner.occupancy import UNKNOWN, OccupancyGrid
 from service.core import PlanningService
 from service.outcome import outcome_of_exception
@@ -114,7 +113,7 @@ async def create_session(request: Request, body: SessionCreate, service: Service
     def work() -> dict[str, Any]:
         robot = service.robot_profile(body.robot)
         grid, name = session_grid(service, body, robot, store.limits.max_cells)
-        options = PlannerOptions.from_dict({"allow_unknown": True, **(body.options or {})})
+        options = live_options(body.options)
         policy = ReplanPolicy(body.replan_period_s, body.time_limit_s or 2.0)
         base = ObstacleLayerParams.for_robot(robot)
         layer = body.layer.params(base) if body.layer is not None else base

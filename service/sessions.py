@@ -40,6 +40,7 @@ from planner.live import (
     ReplanEvent,
     ReplanPolicy,
     ScanObservation,
+    live_options,
 )
 from planner.occupancy import OccupancyGrid
 from planner.robot import RobotProfile
@@ -135,7 +136,7 @@ class SessionStore:
             if sid in self._sessions:
                 raise InvalidInput("session", f"session {sid!r} exists already")
         live = LiveMap(grid, layer or ObstacleLayerParams.for_robot(robot))
-        session = LiveSession(live, robot, options or PlannerOptions(allow_unknown=True), policy or ReplanPolicy())
+        session = LiveSession(live, robot, options or live_options(), policy or ReplanPolicy())
         entry = Entry(sid, client, session, name or grid.name)
         session.listeners.append(lambda event: self._publish(entry, event))
         session.set_pose(start, field="start")

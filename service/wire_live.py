@@ -57,7 +57,8 @@ class SessionCreate(_Strict):
     robot: Name | None = None
     start: PoseIn
     goal: PoseIn | None = None
-    options: dict[str, Any] | None = Field(default=None, description="planner options; allow_unknown defaults to true")
+    options: dict[str, Any] | None = Field(
+        default=None, description="planner options; allow_unknown defaults to true and greed to 2 (live_options)")
     time_limit_s: float | None = Field(default=None, gt=0, le=10, description="each replan's time limit (default 2 s)")
     replan_period_s: float | None = Field(default=None, ge=0.1, le=3600, description="also replan this often")
     layer: LayerIn | None = None

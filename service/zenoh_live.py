@@ -121,12 +121,11 @@ class LiveZenohNode:
                 raise InvalidInput("id", "is the robot id of the key expression; leave it out")
             if robot_id in self.store.ids():
                 self.store.delete(robot_id)
-            from planner.hybrid_astar.search import PlannerOptions
-            from planner.live import ObstacleLayerParams, ReplanPolicy
+            from planner.live import ObstacleLayerParams, ReplanPolicy, live_options
 
             robot = self.service.robot_profile(body.robot)
             grid, name = session_grid(self.service, body, robot, self.store.limits.max_cells)
-            options = PlannerOptions.from_dict({"allow_unknown": True, **(body.options or {})})
+            options = live_options(body.options)
             base = ObstacleLayerParams.for_robot(robot)
             entry, event = self.store.create(
                 f"zenoh:{robot_id}", grid, robot, body.start.as_pose(),

@@ -20,7 +20,8 @@ out). Every random draw (sensor noise) comes from ``seed``.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from collections import Counter
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
@@ -40,7 +41,7 @@ from planner.kinematics import SphereState, wrap
 from planner.live.live_map import LiveMap
 from planner.live.obstacle_layer import ObstacleLayerParams
 from planner.live.range_sensor import RangeSensor
-from planner.live.session import LiveSession, ReplanEvent, ReplanPolicy
+from planner.live.session import LiveSession, ReplanEvent, ReplanPolicy, live_options
 from planner.maps.clearance import ClearanceMap, least_footprint_distance
 from planner.occupancy import OccupancyGrid
 from planner.result import STATE_FIELDS
@@ -70,7 +71,7 @@ class ExploreOptions:
     goal_tolerance_m: float = 0.25
     max_stalled_sweeps: int = 10
     timeout_retries: int = 2
-    planner: PlannerOptions = field(default_factory=lambda: PlannerOptions(allow_unknown=True))
+    planner: PlannerOptions = field(default_factory=live_options)
 
     def __post_init__(self) -> None:
         if self.tracker not in ("mpc", "pursuit"):
@@ -98,8 +99,9 @@ def _percentile(values: list[float], q: float) -> float | None:
 def known_world_length(world: OccupancyGrid, robot: RobotProfile, start: Pose, goal: Pose,
                        options: PlannerOptions, time_limit_s: float) -> float | None:
     """Length (m) of the plan with TRUE known from the start (the yardstick of the driven length), or None
-    when TRUE has no path (or the planner gave up)."""
-    opts = PlannerOptions(**{**options.__dict__, "allow_unknown": False})
+    when TRUE has no path (or the planner gave up): ``options`` with the one-off planner's settings where a live
+    session's differ (no unknown space, the default ``greed``), so a faster replan search cannot move it."""
+    opts = replace(options, allow_unknown=False, greed=PlannerOptions().greed)
     try:
         return HybridAStar(world, robot, opts).plan(start, goal, Termination(time_limit_s)).length_m
     except PlanningError:
@@ -257,6 +259,9 @@ def explore(known: OccupancyGrid, world: OccupancyGrid, robot: RobotProfile, sta
         "replan_latency_p50_s": _percentile(latencies, 50),
         "replan_latency_p95_s": _percentile(latencies, 95),
         "replan_latency_max_s": max(latencies) if latencies else None,
+        "replan_reasons": dict(Counter(e.reason for e in replans)),
+        "replans_failed": sum(not e.ok for e in replans),
+        "replan_methods": dict(Counter(e.method for e in replans if e.ok)),
         "map_update_p50_s": _percentile(update_s, 50),
         "map_update_p95_s": _percentile(update_s, 95),
         "sweeps": len(update_s),

@@ -5,6 +5,7 @@
 * :mod:`~planner.live.live_map` — the live map (static layer + obstacle layer) and the changed rectangle;
 * :mod:`~planner.live.refresh` — refresh a planner's distance field and heuristic for the changed cells;
 * :mod:`~planner.live.session` — goal, pose and path of one robot, replanned when blocked or on a timer;
+* :mod:`~planner.live.guide` — a heuristic that closes the gaps the robot cannot roll through, for replans;
 * :mod:`~planner.live.range_sensor` — a simulated range sensor ray-cast in a true world.
 
 The closed-loop exploration run that uses them all is :mod:`planner.closed_loop.explore`.
@@ -15,7 +16,7 @@ from planner.live.observations import Observation, PointObservation, RegionUpdat
 from planner.live.obstacle_layer import ObstacleLayerParams
 from planner.live.range_sensor import RangeSensor
 from planner.live.refresh import refresh
-from planner.live.session import LiveSession, ReplanEvent, ReplanPolicy
+from planner.live.session import LiveSession, ReplanEvent, ReplanPolicy, live_options
 
 __all__ = [
     "CellRect",
@@ -31,5 +32,6 @@ __all__ = [
     "ReplanPolicy",
     "ScanObservation",
     "SensorPose",
+    "live_options",
     "refresh",
 ]

@@ -14,6 +14,9 @@ what a rebuilt planner holds after the same cap, so a refreshed planner plans as
 multipliers are rebuilt on the coarse cells over the recomputed cells and the cached heuristic tables are
 dropped (the goal's wavefront is recomputed on the next plan, cut off at twice the start's cost as usual).
 
+The guide of :mod:`planner.live.guide` (the same multipliers with the gaps the robot cannot roll through
+closed) is patched on the same coarse cells.
+
 The interface to the planner is narrow on purpose: the grid (a view the live map updates in place), the
 changed rectangles, and the planner's public ``clearance``, ``holonomic_mult`` and heuristic cache.
 """
@@ -30,6 +33,7 @@ from scipy.ndimage import distance_transform_edt
 
 from planner.hybrid_astar.heuristics import coarse_cost_grid
 from planner.hybrid_astar.search import CLEARANCE_REACH_M, HybridAStar
+from planner.live.guide import patch_guide
 from planner.live.live_map import CellRect
 
 PATCH_SHARE_LIMIT = 0.35
@@ -149,3 +153,4 @@ def _refresh_coarse(planner: HybridAStar, inner: CellRect) -> None:
     planner.holonomic_mult[cy0:cy1, cx0:cx1] = coarse_cost_grid(
         fine, planner.centre_threshold_m, planner.footprint.radius_m,
         max(o.proximity_range_m, planner.robot.preferred_clearance_m), o.cost_penalty, f)
+    patch_guide(planner, cy0, cy1, cx0, cx1, fine)

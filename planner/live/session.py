@@ -16,15 +16,16 @@ import math
 import time
 from collections import deque
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
 
 from planner.angles import check_angle
-from planner.errors import GoalOccupied, InvalidInput, PlanningError, StartOccupied
+from planner.errors import BadEndpoint, GoalOccupied, InvalidInput, PlannerCancelled, PlanningError, StartOccupied
 from planner.hybrid_astar.search import HybridAStar, PlannerOptions, Pose
 from planner.kinematics import wrap
+from planner.live.guide import WIDE_M, guided_plan
 from planner.live.live_map import CellRect, LiveMap, MapUpdate
 from planner.live.observations import Observation
 from planner.live.refresh import capped, refresh
@@ -38,6 +39,19 @@ EVENTS_KEPT = 256
 MAX_PENDING_REGIONS = 256
 """Changed rectangles a session collects before refreshing; beyond that they are merged into one."""
 
+LIVE_OPTION_DEFAULTS: dict[str, Any] = {"allow_unknown": True, "greed": 2.0}
+"""Planner options a live session uses unless told otherwise: unknown space is traversable (Nav2's default,
+what exploring needs), and the search is greedier than a one-off plan's (f = g + 3·h instead of g + 2·h): a
+replan must come back while the robot is still driving, and the smoothing recovers the length. On the explore
+sweep's slow replans (long detours round a blocked garage aisle) this cut the expansions about twentyfold with
+paths no longer (``sphereplan bench --suite explore`` measures both)."""
+
+
+def live_options(given: dict[str, Any] | None = None) -> PlannerOptions:
+    """:data:`LIVE_OPTION_DEFAULTS` overridden by the ``given`` planner options (a JSON object, checked by name)."""
+    return PlannerOptions.from_dict({**LIVE_OPTION_DEFAULTS, **(given or {})})
+
+
 REASONS = ("goal", "blocked", "timer", "map_changed", "request")
 """Why a session replans: a new goal, the path ahead is blocked, the replan timer, a failed plan retried
 after the map changed, or a caller asked."""
@@ -49,12 +63,24 @@ class ReplanPolicy:
     as Nav2's planner server with ``expected_planner_frequency`` 0); ``time_limit_s``: each plan's limit;
     ``arrival_tolerance_m``: the goal counts as reached (no more replans) this close; ``retry_period_s``: after a
     failed plan, a map change triggers a new attempt at most this often (a stopped robot's flickering sensor
-    noise must not replan at the sensor's rate)."""
+    noise must not replan at the sensor's rate); ``splice_lead_s``: a robot rolling along its path is not
+    replanned from where it is (a new path may start against its motion, and it cannot stop on the spot) but from
+    the state of its path it reaches after rolling ``splice_lead_s`` at its speed and then braking, when that is
+    short of the blockage; the new path keeps the old one up to there (0 = always from the current pose);
+    ``guided``: search first with the guides of
+    :mod:`planner.live.guide` (gaps the robot cannot roll through closed; then gaps up to ``guide_levels_m``
+    wider), each for at most ``guide_expansions`` expansions and all of them for at most ``guide_share`` of the
+    time limit, then, if they found nothing, with the planner's own heuristic for the rest of it."""
 
     period_s: float | None = None
     time_limit_s: float = 2.0
     arrival_tolerance_m: float = 0.25
     retry_period_s: float = 1.0
+    splice_lead_s: float = 0.5
+    guided: bool = True
+    guide_levels_m: tuple[float, ...] = (0.0, WIDE_M)
+    guide_expansions: int = 6000
+    guide_share: float = 0.5
 
     def __post_init__(self) -> None:
         if self.period_s is not None and not (math.isfinite(self.period_s) and self.period_s > 0):
@@ -65,6 +91,14 @@ class ReplanPolicy:
             raise InvalidInput("arrival_tolerance_m", "must be a finite number > 0")
         if not (math.isfinite(self.retry_period_s) and self.retry_period_s >= 0):
             raise InvalidInput("retry_period_s", "must be a finite number of seconds ≥ 0")
+        if not (math.isfinite(self.splice_lead_s) and 0 <= self.splice_lead_s <= 10):
+            raise InvalidInput("splice_lead_s", f"must be in [0, 10] s, got {self.splice_lead_s!r}")
+        if not (math.isfinite(self.guide_share) and 0 < self.guide_share < 1):
+            raise InvalidInput("guide_share", f"must be in (0, 1), got {self.guide_share!r}")
+        if not all(math.isfinite(w) and 0 <= w <= 1 for w in self.guide_levels_m):
+            raise InvalidInput("guide_levels_m", f"must be widenings in [0, 1] m, got {self.guide_levels_m!r}")
+        if not 0 < self.guide_expansions <= 1_000_000:
+            raise InvalidInput("guide_expansions", f"must be in [1, 1000000], got {self.guide_expansions!r}")
 
 
 @dataclass(frozen=True)
@@ -72,7 +106,11 @@ class ReplanEvent:
     """One replan: ``seq`` counts the session's plans from 1; ``reason`` is one of :data:`REASONS`;
     ``latency_s`` runs from the trigger (observation applied, pose or goal received) to the new path, and
     splits into ``refresh_s`` (bringing the planner's distance field and heuristic up to date) and
-    ``planning_time_s`` (the search); ``blocked_at`` is the first blocked pose of the old path."""
+    ``planning_time_s`` (the search); ``blocked_at`` is the first blocked pose of the old path; ``method`` says
+    which search gave the answer: ``"guided"`` (:mod:`planner.live.guide`), ``"guided+0.15m"`` (the guide for gaps
+    that much wider) or ``"ordinary"`` (the planner's own heuristic, alone or after guided searches that found
+    nothing); ``spliced_m`` is how much of the old path, from the robot on, the new one keeps (``start`` is then
+    the state it was planned from, at the end of that stretch)."""
 
     seq: int
     reason: str
@@ -86,6 +124,8 @@ class ReplanEvent:
     start: Pose
     blocked_at: tuple[float, float] | None = None
     refresh_mode: str = ""
+    method: str = ""
+    spliced_m: float = 0.0
 
     def to_json(self) -> dict[str, Any]:
         return {
@@ -94,8 +134,26 @@ class ReplanEvent:
             "planning_time_s": round(self.planning_time_s, 6), "length_m": self.length_m,
             "start": {"x": self.start[0], "y": self.start[1], "yaw": self.start[2]},
             "blocked_at": None if self.blocked_at is None else {"x": self.blocked_at[0], "y": self.blocked_at[1]},
-            "refresh_mode": self.refresh_mode,
+            "refresh_mode": self.refresh_mode, "method": self.method, "spliced_m": round(self.spliced_m, 3),
         }
+
+
+SPLICE_CLEAR_M = 1.0
+"""A replan is spliced onto the old path only where that leaves at least this much of it before the blockage."""
+
+
+def _spliced(prefix: np.ndarray, result: PlanResult) -> PlanResult:
+    """``result`` (planned from the last state of ``prefix``) with ``prefix`` (the old path's states from the robot
+    on) put in front of it, time and arc length counted from the robot."""
+    head = prefix.copy()
+    head[:, 5] -= head[0, 5]
+    head[:, 6] -= head[0, 6]
+    tail = result.states[1:].copy()
+    tail[:, 5] += head[-1, 5]
+    tail[:, 6] += head[-1, 6]
+    x, y, yaw = (float(v) for v in head[0, :3])
+    return replace(result, states=np.vstack([head, tail]), start=(x, y, yaw),
+                   extra={**result.extra, "spliced_m": float(head[-1, 6])})
 
 
 def _pose(value: Any, field_name: str) -> Pose:
@@ -120,8 +178,7 @@ class LiveSession:
     ----------
     live_map : the robot's :class:`LiveMap` (the session owns it from now on).
     robot : the robot profile whose padded footprint is checked.
-    options : planner options; ``allow_unknown`` defaults to True here (Nav2's default: unknown space is
-        traversable, which is what exploring needs).
+    options : planner options; default :func:`live_options` (unknown space traversable, a greedier search).
     policy : when to replan.
     clock : seconds on a monotonic scale (the simulation passes its own time).
     """
@@ -130,7 +187,7 @@ class LiveSession:
                  policy: ReplanPolicy | None = None, clock: Callable[[], float] = time.monotonic) -> None:
         self.map = live_map
         self.robot = robot
-        self.options = options or PlannerOptions(allow_unknown=True)
+        self.options = options or live_options()
         self.policy = policy or ReplanPolicy()
         self.clock = clock
         self.pose: Pose | None = None
@@ -147,6 +204,7 @@ class LiveSession:
         self._last_plan_t = -math.inf
         self._sync_s = 0.0  # refresh time not yet reported by a replan
         self._sync_mode = ""
+        self._blocked: int | None = None  # the blocked state of the path, for the replan it triggers
 
     # ------------------------------------------------------------------ inputs
 
@@ -195,6 +253,7 @@ class LiveSession:
         if blocked is None:
             return update, None
         xy = (float(self.path.states[blocked, 0]), float(self.path.states[blocked, 1]))
+        self._blocked = blocked
         return update, self.replan("blocked", t0, blocked_at=xy)
 
     # ------------------------------------------------------------------ state
@@ -273,25 +332,94 @@ class LiveSession:
         self._seq += 1
         self._last_plan_t = self.clock()
         start = self.pose
+        limit = self.policy.time_limit_s if time_limit_s is None else time_limit_s
+        t_search = time.perf_counter()
+        method = "ordinary"
+        blocked, self._blocked = self._blocked, None
+        splice = self._splice_index(blocked) if reason in ("blocked", "timer") else None
+        spliced_m = 0.0
         try:
-            limit = self.policy.time_limit_s if time_limit_s is None else time_limit_s
-            result = self._planner.plan(start, self.goal, Termination(limit))
+            if splice is not None:
+                assert self.path is not None
+                old, i = self.path.states, self._progress.index
+                try:
+                    x, y, yaw = (float(v) for v in old[splice, :3])
+                    result, method = self._search((x, y, yaw), self.goal, limit)
+                except (BadEndpoint, PlannerCancelled, InvalidInput):
+                    raise
+                except PlanningError:
+                    splice = None  # from the splice point nothing was found: try from where the robot is
+                    left = max(limit - (time.perf_counter() - t_search), 0.25 * limit)
+                    result, method = self._search(start, self.goal, left)
+                else:
+                    start = result.start
+                    result = _spliced(old[i:splice + 1], result)
+                    spliced_m = float(old[splice, 6] - old[i, 6])
+            else:
+                result, method = self._search(start, self.goal, limit)
         except PlanningError as exc:
             self.path = None
             self._progress = _Progress()
             event = ReplanEvent(self._seq, reason, False, exc.code, exc.msg, time.perf_counter() - t0, refresh_s,
-                                exc.planning_time_s, 0.0, start, blocked_at, mode)
+                                time.perf_counter() - t_search, 0.0, start, blocked_at, mode, method)
             self.last_failure = event
         else:
             self.path = result
             self._progress = _Progress()
             self.last_failure = None
             event = ReplanEvent(self._seq, reason, True, 0, "", time.perf_counter() - t0, refresh_s,
-                                result.planning_time_s, result.length_m, start, blocked_at, mode)
+                                time.perf_counter() - t_search, result.length_m, start, blocked_at, mode, method,
+                                spliced_m)
         self.events.append(event)
         for listener in list(self.listeners):
             listener(event)
         return event
+
+    def _splice_index(self, blocked: int | None) -> int | None:
+        """The state of the path to plan from instead of the current pose (see ``ReplanPolicy.splice_lead_s``):
+        ``splice_lead_s`` at the path's speed at the robot, then the braking distance, ahead; None when the robot
+        is (nearly) still, the path stops on the way there, or that state is less than :data:`SPLICE_CLEAR_M`
+        short of the blocked one."""
+        if self.path is None or self.policy.splice_lead_s <= 0:
+            return None
+        st = self.path.states
+        i = self._progress.index
+        v = abs(float(st[i, 4]))
+        ahead = v * self.policy.splice_lead_s + v * v / (2.0 * self.robot.max_accel_m_s2)
+        if ahead < 0.05:
+            return None
+        end = float(st[-1, 6]) if blocked is None else float(st[blocked, 6]) - SPLICE_CLEAR_M
+        target = float(st[i, 6]) + ahead
+        if target > end:
+            return None
+        k = int(np.searchsorted(st[:, 6], target))
+        if not i < k < len(st) - 1:
+            return None
+        # only across a stretch the robot rolls without stopping: a stop (a cusp, or the roll-in at the head of a
+        # path spliced before) is where a new path may start from the robot itself, and splices must not pile up
+        return k if bool(np.all(np.abs(st[i:k + 1, 4]) > 1e-6)) else None
+
+    def _search(self, start: Pose, goal: Pose, limit: float) -> tuple[PlanResult, str]:
+        """One search within ``limit`` seconds in all: the guided ones first (when the policy says so), then the
+        ordinary one. Returns the path and the method that found it; raises the last search's error."""
+        assert self._planner is not None
+        pol = self.policy
+        t0 = time.perf_counter()
+        if pol.guided:
+            for widen in pol.guide_levels_m:
+                budget = limit * pol.guide_share - (time.perf_counter() - t0)
+                if budget <= 0:
+                    break
+                try:
+                    result = guided_plan(self._planner, start, goal,
+                                         Termination(budget, max_iterations=pol.guide_expansions), widen)
+                except (BadEndpoint, PlannerCancelled, InvalidInput):
+                    raise  # the ordinary search would say the same
+                except PlanningError:
+                    continue  # proves nothing: a guide is not admissible everywhere
+                return result, "guided" if widen == 0 else f"guided+{widen:g}m"
+        rest = max(limit - (time.perf_counter() - t0), limit * (1.0 - pol.guide_share))
+        return self._planner.plan(start, goal, Termination(rest)), "ordinary"
 
     def status(self) -> dict[str, Any]:
         """The session's state as JSON: pose, goal, path length and progress, the last replan, map knowledge."""
@@ -313,4 +441,4 @@ class LiveSession:
         }
 
 
-__all__ = ["REASONS", "LiveSession", "ReplanEvent", "ReplanPolicy"]
+__all__ = ["LIVE_OPTION_DEFAULTS", "REASONS", "LiveSession", "ReplanEvent", "ReplanPolicy", "live_options"]

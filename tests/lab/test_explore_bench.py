@@ -41,3 +41,12 @@ def test_subset_explored_with_the_right_outcome() -> None:
         assert r.correct, (r.spec.name, r.outcome, r.metrics)
     table = format_table(rows, {"test": [0.001, 0.002]})
     assert "right outcome in 2/2" in table
+    # every replan is counted under its reason, and the table says why each world replanned
+    for r in rows:
+        assert sum(r.metrics["replan_reasons"].values()) == r.metrics["replans"]
+        assert r.metrics["replans_failed"] <= r.metrics["replans"]
+    replanned = [r for r in rows if r.metrics["replans"]]
+    assert replanned
+    for r in replanned:
+        line = next(ln for ln in table.splitlines() if ln.startswith(r.spec.name))
+        assert all(f"{k} {v}" in line for k, v in r.metrics["replan_reasons"].items())

@@ -149,3 +149,22 @@ def test_bad_observations_and_limits(client: TestClient, session: dict[str, Any]
     assert busy.status_code == 429 and "Retry-After" in busy.headers
     second = client.post("/v1/sessions", json={"map": "hall", "start": pose(HALL_START)})
     assert second.status_code == 422 and second.json()["field"] == "session"
+
+
+def test_sessions_use_the_live_planner_options(client: TestClient) -> None:
+    """A session plans with the live defaults (unknown traversable, the greedier search) under what it is given,
+    and each replan says which search answered."""
+    from planner.live import live_options
+    from planner.live.session import LIVE_OPTION_DEFAULTS
+
+    r = client.post("/v1/sessions", json={"map": "hall", "start": pose(HALL_START), "goal": pose(HALL_GOAL),
+                                          "options": {"allow_unknown": False}})
+    assert r.status_code == 201, r.text
+    body = r.json()
+    assert body["replan"]["method"] in ("guided", "ordinary")
+    options = client.app.state.sessions.get(body["id"]).session.options  # type: ignore[attr-defined]
+    assert options.allow_unknown is False and options.greed == LIVE_OPTION_DEFAULTS["greed"]
+    plain = client.post("/v1/sessions", json={"map": "hall", "start": pose(HALL_START)}).json()
+    assert client.app.state.sessions.get(plain["id"]).session.options == live_options()  # type: ignore[attr-defined]
+    bad = client.post("/v1/sessions", json={"map": "hall", "start": pose(HALL_START), "options": {"greedy": 2}})
+    assert bad.status_code == 422 and "options.greedy" in bad.text

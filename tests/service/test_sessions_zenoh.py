@@ -90,7 +90,12 @@ def test_zenoh_topics_replan_when_observations_block_the_path(doors: tuple[Sessi
         wait_for(lambda: len(paths) >= 2 and sum(s.get("state") == "replanned" for s in statuses) >= 2)
         replanned = [s for s in statuses if s.get("state") == "replanned"]
         assert replanned[-1]["replan"]["reason"] == "blocked"
-        assert replanned[-1]["replan"]["start"] == {"x": 2.2, "y": 2.0, "yaw": 0.0}
+        # the robot rolls along its path, so the new path keeps the old one from the robot for a stretch and is
+        # planned from the end of it (ReplanPolicy.splice_lead_s)
+        replan = replanned[-1]["replan"]
+        assert replan["spliced_m"] > 0 and replan["start"] != {"x": 2.2, "y": 2.0, "yaw": 0.0}
+        head = paths[1]["states"][0]
+        assert np.hypot(head["x"] - 2.2, head["y"] - 2.0) < 0.3
         assert paths[1]["states"] != first["states"]
         # a malformed message is answered on the status topic, naming the field
         z.put("sphereplan/r1/live/observations", json.dumps({"scan": {"ranges": [1.0]}}))
@@ -189,9 +194,10 @@ def test_ros2_odometry_and_pointcloud_replan(doors: tuple[SessionStore, list[Any
             got.wait(timeout=5)
         assert len(received) > n_before, "no new path after the PointCloud2 blocked the old one"
         event = store.get(sid).session.events[-1]
-        assert event.reason == "blocked" and event.ok and event.start == (2.2, 2.0, 0.0)
+        assert event.reason == "blocked" and event.ok and event.spliced_m > 0  # odometry on the path, rolling
         path = received[-1]
         xy = np.array([[p.pose.position.x, p.pose.position.y] for p in path.poses])
+        assert np.hypot(xy[0, 0] - 2.2, xy[0, 1] - 2.0) < 0.3  # the published path starts at the robot
         assert xy[np.abs(xy[:, 0] - 5.15) < 0.3, 1].min() > 6.2  # around what the cloud showed
     finally:
         for entity in (path_sub, odom_pub, goal_pub, cloud_pub):

@@ -66,7 +66,16 @@ def test_blocked_path_is_replanned_from_the_current_pose() -> None:
     assert update.changed is not None
     assert event is not None and event.ok and event.reason == "blocked"
     assert event.blocked_at is not None and abs(event.blocked_at[0] - 10.0) < 0.6
-    assert event.start == (3.0, 5.0, 0.0) and event.latency_s >= event.planning_time_s > 0
+    assert event.latency_s >= event.planning_time_s > 0
+    # rolling at the path's speed, the robot is replanned from the state it reaches after the lead time and
+    # braking (0.5 m/s · 0.5 s + 0.5²/(2 · 0.5) m = 0.5 m ahead), and the new path keeps the old one up to there
+    assert event.spliced_m == pytest.approx(0.5, abs=0.05)
+    assert event.start[0] == pytest.approx(3.0 + event.spliced_m, abs=0.1) and event.start[1] == pytest.approx(5.0)
+    assert session.path is not None and session.path.extra["spliced_m"] == event.spliced_m
+    head = session.path.states
+    assert np.hypot(head[0, 0] - 3.0, head[0, 1] - 5.0) < 0.05 and head[0, 5] == head[0, 6] == 0.0
+    assert np.all(np.diff(head[:, 6]) >= 0) and np.all(np.diff(head[:, 5]) >= 0)
+    assert np.hypot(*np.diff(head[:, :2], axis=0).T).max() <= 0.05 + 1e-9  # no jump where the paths meet
     assert heard == [first, event]
     assert session.path is not None and session.blocked_index() is None
     states = session.path.states
@@ -97,3 +106,53 @@ def test_timer_replans_and_goal_needs_a_pose() -> None:
     with pytest.raises(InvalidInput) as err:
         session.set_pose((1.0, 1.0, 100.0))
     assert err.value.field == "pose.yaw"
+
+
+def test_live_options_default_and_yield_to_given_ones() -> None:
+    from planner.closed_loop.explore import ExploreOptions
+    from planner.live import live_options
+    from planner.live.session import LIVE_OPTION_DEFAULTS
+
+    session = LiveSession(LiveMap(corridor()), ROBOT)
+    assert session.options.allow_unknown is True
+    assert session.options.greed == LIVE_OPTION_DEFAULTS["greed"] != PlannerOptions().greed
+    given = live_options({"allow_unknown": False, "n_rolls": 9})
+    assert (given.allow_unknown, given.n_rolls, given.greed) == (False, 9, LIVE_OPTION_DEFAULTS["greed"])
+    assert live_options({"greed": 0.5}).greed == 0.5
+    with pytest.raises(InvalidInput) as err:
+        live_options({"greedy": 1.0})
+    assert err.value.field == "options.greedy"
+    assert ExploreOptions().planner == live_options()
+
+
+def test_a_still_robot_or_no_lead_replans_from_the_current_pose() -> None:
+    for policy in (ReplanPolicy(time_limit_s=5.0, splice_lead_s=0.0), ReplanPolicy(time_limit_s=5.0)):
+        live = LiveMap(corridor(), ObstacleLayerParams.for_robot(ROBOT))
+        session = LiveSession(live, ROBOT, policy=policy)
+        session.set_pose(START)
+        session.set_goal(GOAL)
+        # with no lead: at 3 m on the path; with the default lead: at the start, where the path's speed is 0
+        pose = (3.0, 5.0, 0.0) if policy.splice_lead_s == 0 else START
+        session.set_pose(pose)
+        _, event = session.observe(PointObservation(wall_points(10.0, 0.05, 7.5), np.array([4.0, 5.0, 0.3])))
+        assert event is not None and event.ok and event.reason == "blocked"
+        assert event.start == pose and event.spliced_m == 0.0
+    with pytest.raises(InvalidInput):
+        ReplanPolicy(splice_lead_s=-1.0)
+
+
+def test_no_splice_across_a_stop_on_the_path() -> None:
+    """A stretch with a stop on it (a cusp, or the roll-in at the head of a path spliced before) is not kept:
+    splices must not pile up, so the replan starts from the robot."""
+    live = LiveMap(corridor(), ObstacleLayerParams.for_robot(ROBOT))
+    session = LiveSession(live, ROBOT, policy=ReplanPolicy(time_limit_s=5.0))
+    session.set_pose(START)
+    session.set_goal(GOAL)
+    session.set_pose((3.0, 5.0, 0.0))
+    assert session.path is not None
+    states = session.path.states
+    i = session._progress.index
+    stop = i + int(np.searchsorted(states[i:, 6], states[i, 6] + 0.2))
+    states[stop, 4] = 0.0
+    _, event = session.observe(PointObservation(wall_points(10.0, 0.05, 7.5), np.array([4.0, 5.0, 0.3])))
+    assert event is not None and event.ok and event.spliced_m == 0.0 and event.start == (3.0, 5.0, 0.0)
