@@ -20,7 +20,7 @@ from numba import njit
 from planner.hybrid_astar.dubins import WORD_TURNS, dubins_distance, dubins_shortest
 from planner.hybrid_astar.heap import heap_pop, heap_push
 from planner.kinematics import arc_step, roll_shift, wrap
-from planner.maps.clearance import footprint_margin
+from planner.maps.clearance import circle_margin, footprint_hits
 
 RUNNING, FOUND, EXHAUSTED, FULL = 0, 1, 2, 3
 
@@ -30,9 +30,38 @@ C_NODES, C_EXPANSIONS, C_SINCE_SHOT, C_RESULT, C_SHOT_SEGS, C_BEST = 0, 1, 2, 3,
 (P_OX, P_OY, P_RES, P_RC, P_HOX, P_HOY, P_HCELL, P_RHO, P_GX, P_GY, P_GYAW, P_TOL_XY, P_TOL_YAW, P_RADIUS,
  P_STEP, P_SPACING, P_NON_STRAIGHT, P_CHANGE, P_REVERSE, P_SWITCH, P_COST_PENALTY, P_PROX_RANGE, P_GREED,
  P_SHOT_RATIO, P_MAX_ROLL, P_USE_DUBINS, P_ALLOW_REVERSE, P_N_YAW, P_USE_RS, P_RS_CELL, P_RS_HALF,
- P_PREFERRED, P_REACH, P_BEST_H) = range(34)
-N_PARAMS = 34
+ P_PREFERRED, P_REACH, P_BEST_H, P_REJECT) = range(35)
+N_PARAMS = 35
 MAX_SHOT_SEGS = 6  # a Dubins shot has 3 segments, a Reeds–Shepp shot up to 5
+
+
+@njit(cache=True)
+def _pose_margin(
+    clear: np.ndarray, blocked: np.ndarray, p: np.ndarray, offx: np.ndarray, offy: np.ndarray, px: np.ndarray,
+    py: np.ndarray, x: float, y: float, yaw: float,
+) -> float:
+    """:func:`planner.maps.clearance.footprint_margin` (the same value at every pose), with one shortcut: where
+    the robot's centre is so close to a blocked cell that the cell meets the disc inscribed in the footprint,
+    the pose collides and the exact polygon test is skipped.
+
+    The stored clearance of the centre's cell is d − √2·res (d: its centre to the nearest blocked cell's
+    centre), so that blocked cell is at most d + res/√2 from the robot's centre; p[P_REJECT] is
+    r_in − (√2 + 1/√2)·res less a micrometre (r_in: the inscribed radius), and a stored clearance below it
+    proves the hit.
+    """
+    ox, oy, res = p[P_OX], p[P_OY], p[P_RES]
+    m = circle_margin(clear, ox, oy, res, x, y, yaw, offx, offy, p[P_RC])
+    if m >= 0.0:
+        return m
+    hit = m if m > -1e9 else -1e9
+    ix = int(math.floor((x - ox) / res))
+    iy = int(math.floor((y - oy) / res))
+    h, w = clear.shape
+    if 0 <= ix < w and 0 <= iy < h and clear[iy, ix] < p[P_REJECT]:
+        return hit
+    if footprint_hits(blocked, ox, oy, res, x, y, yaw, px, py):
+        return hit
+    return 0.0
 
 
 @njit(cache=True)
@@ -47,7 +76,7 @@ def _motion_margin(
     stay clear while their centres move less than m, and a centre moves at most (1 + |κ|·reach) per metre
     travelled (reach = the farthest circle centre from the robot's centre).
     """
-    ox, oy, res, r_c, radius, spacing = p[P_OX], p[P_OY], p[P_RES], p[P_RC], p[P_RADIUS], p[P_SPACING]
+    radius, spacing = p[P_RADIUS], p[P_SPACING]
     worst = worst_so_far
     shift = abs(radius * d_roll)
     t = 0.0
@@ -55,7 +84,7 @@ def _motion_margin(
     while t < shift:
         t = min(shift, t + advance)
         xs, ys = roll_shift(x, y, yaw, radius, math.copysign(t / radius, d_roll))
-        m = footprint_margin(clear, blocked, ox, oy, res, xs, ys, yaw, offx, offy, r_c, px, py)
+        m = _pose_margin(clear, blocked, p, offx, offy, px, py, xs, ys, yaw)
         if m < worst:
             worst = m
             if worst < 0.0:
@@ -69,7 +98,7 @@ def _motion_margin(
     while t < length:
         t = min(length, t + advance)
         xa, ya, ya2 = arc_step(x1, y1, yaw, curv, math.copysign(t, s))
-        m = footprint_margin(clear, blocked, ox, oy, res, xa, ya, ya2, offx, offy, r_c, px, py)
+        m = _pose_margin(clear, blocked, p, offx, offy, px, py, xa, ya, ya2)
         if m < worst:
             worst = m
             if worst < 0.0:
@@ -336,15 +365,16 @@ def search_chunk(
                 break
             for ri in range(n_roll):
                 d_roll = rolls[ri] - roll
-                margin = _motion_margin(clear, blocked, p, offx, offy, px, py, x, y, yaw, d_roll, curvs[ri],
-                                        direction * step, math.inf)
-                if margin < 0.0:
-                    continue
                 cx, cy = roll_shift(x, y, yaw, radius, d_roll)
                 cx, cy, cyaw = arc_step(cx, cy, yaw, curvs[ri], direction * step)
                 cyaw = wrap(cyaw)
+                # a child already expanded is dropped before its (far dearer) collision sweep
                 ckey = _closed_key(p, w, cx, cy, cyaw, roll_bins[ri], n_roll_bins)
                 if closed[ckey >> 3] & (1 << (ckey & 7)):
+                    continue
+                margin = _motion_margin(clear, blocked, p, offx, offy, px, py, x, y, yaw, d_roll, curvs[ri],
+                                        direction * step, math.inf)
+                if margin < 0.0:
                     continue
                 h = _heuristic(htab, rs, p, cx, cy, cyaw)
                 if not math.isfinite(h):

@@ -393,6 +393,8 @@ class HybridAStar:
         p[kernels.P_PROX_RANGE] = max(o.proximity_range_m, self.robot.preferred_clearance_m)
         p[kernels.P_PREFERRED] = self.robot.preferred_clearance_m
         p[kernels.P_REACH] = float(np.hypot(self.footprint.offsets_x, self.footprint.offsets_y).max())
+        p[kernels.P_REJECT] = (inscribed_radius(self.polygon) - (math.sqrt(2.0) + math.sqrt(0.5)) * self.grid.resolution_m
+                               - 1e-6)
         p[kernels.P_GREED], p[kernels.P_SHOT_RATIO] = o.greed, o.analytic_ratio_m
         p[kernels.P_MAX_ROLL] = self.robot.max_roll_rad
         p[kernels.P_USE_DUBINS] = 0.0 if reverse else 1.0
