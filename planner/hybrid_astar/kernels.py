@@ -19,20 +19,27 @@ from numba import njit
 
 from planner.hybrid_astar.dubins import WORD_TURNS, dubins_distance, dubins_shortest
 from planner.hybrid_astar.heap import heap_pop, heap_push
+from planner.hybrid_astar.reeds_shepp import MAX_SEGS as RS_MAX_SEGS
+from planner.hybrid_astar.reeds_shepp import MAX_SHOT_M, rs_best
 from planner.kinematics import arc_step, roll_shift, wrap
 from planner.maps.clearance import circle_margin, footprint_hits
 
 RUNNING, FOUND, EXHAUSTED, FULL = 0, 1, 2, 3
+SHOT_DUBINS, SHOT_WEIGHTED, SHOT_SHORTEST = 0, 1, 2  # analytic shot kinds (try_shot)
 
 # counters[] slots
-C_NODES, C_EXPANSIONS, C_SINCE_SHOT, C_RESULT, C_SHOT_SEGS, C_BEST = 0, 1, 2, 3, 4, 5
+C_NODES, C_EXPANSIONS, C_SINCE_SHOT, C_RESULT, C_SHOT_SEGS, C_BEST, C_TRIED = 0, 1, 2, 3, 4, 5, 6
+C_HELD_NODE, C_HELD_SEGS, C_HELD_UNTIL = 7, 8, 9  # a mostly-backwards shot held back (see search_chunk, 3c)
+N_COUNTERS = 10
 # params[] slots (float64)
 (P_OX, P_OY, P_RES, P_RC, P_HOX, P_HOY, P_HCELL, P_RHO, P_GX, P_GY, P_GYAW, P_TOL_XY, P_TOL_YAW, P_RADIUS,
  P_STEP, P_SPACING, P_NON_STRAIGHT, P_CHANGE, P_REVERSE, P_SWITCH, P_COST_PENALTY, P_PROX_RANGE, P_GREED,
  P_SHOT_RATIO, P_MAX_ROLL, P_USE_DUBINS, P_ALLOW_REVERSE, P_N_YAW, P_USE_RS, P_RS_CELL, P_RS_HALF,
- P_PREFERRED, P_REACH, P_BEST_H, P_REJECT) = range(35)
-N_PARAMS = 35
+ P_PREFERRED, P_REACH, P_BEST_H, P_REJECT, P_CLOSER_H, P_HELD_COST, P_BACK_SHARE) = range(38)
+N_PARAMS = 38
+BEST_SHOT_EVERY = 256  # reversing: every this many expansions, a Reeds–Shepp shot from the closest node if new
 MAX_SHOT_SEGS = 6  # a Dubins shot has 3 segments, a Reeds–Shepp shot up to 5
+HOLD_MIN_EXPANSIONS = 4000  # a held-back shot waits at least this many expansions (and as many as came before)
 
 
 @njit(cache=True)
@@ -149,39 +156,126 @@ def _closed_key(p: np.ndarray, w: int, x: float, y: float, yaw: float, rb: int, 
 
 
 @njit(cache=True)
+def _shot_word(p: np.ndarray, kind: int, x: float, y: float, yaw: float, tx: float, ty: float,
+               gyaw: float, turns: np.ndarray, lens: np.ndarray) -> int:
+    """The car's word from (x, y, yaw) to (tx, ty, gyaw): segment turns (+1, 0, −1) and signed lengths (m).
+    ``kind`` :data:`SHOT_DUBINS`, :data:`SHOT_WEIGHTED` (the cheapest Reeds–Shepp word under the search's reverse
+    and cusp weights) or :data:`SHOT_SHORTEST` (the shortest Reeds–Shepp word); 0 = none."""
+    rho = p[P_RHO]
+    if kind == SHOT_WEIGHTED:
+        n, _ = rs_best(x, y, yaw, tx, ty, gyaw, rho, p[P_REVERSE], p[P_SWITCH], turns, lens)
+        return n
+    if kind == SHOT_SHORTEST:
+        n, _ = rs_best(x, y, yaw, tx, ty, gyaw, rho, 1.0, 0.0, turns, lens)
+        return n
+    word, t, pp, q = dubins_shortest(x, y, yaw, tx, ty, gyaw, rho)
+    if word < 0:
+        return 0
+    n = 0
+    for k in range(3):
+        length = (t, pp, q)[k] * rho
+        if length < 1e-9:
+            continue
+        turns[n] = WORD_TURNS[word, k]
+        lens[n] = length
+        n += 1
+    return n
+
+
+@njit(cache=True)
+def _rolled_end(x: float, y: float, yaw: float, roll: float, groll: float, turns: np.ndarray, lens: np.ndarray,
+                n: int, radius: float, rho: float, max_roll: float) -> tuple[float, float, float]:
+    """Where the sphere ends after rolling the word (each arc held at ±φmax, straights upright), then ``groll``."""
+    cx, cy, cyaw, croll = x, y, yaw, roll
+    for k in range(n):
+        r_k = turns[k] * max_roll
+        cx, cy = roll_shift(cx, cy, cyaw, radius, r_k - croll)
+        cx, cy, cyaw = arc_step(cx, cy, cyaw, turns[k] / rho, lens[k])
+        croll = r_k
+    cx, cy = roll_shift(cx, cy, cyaw, radius, groll - croll)
+    return cx, cy, cyaw
+
+
+@njit(cache=True)
+def _land(x: float, y: float, yaw: float, roll: float, gx: float, gy: float, gyaw: float, groll: float,
+          turns: np.ndarray, lens: np.ndarray, n: int, radius: float, rho: float, max_roll: float) -> bool:
+    """Solve the word's segment lengths (signs kept, magnitudes ≥ 0) so that the rolled sphere lands on the goal
+    (< 0.1 mm, < 1e-4 rad): Gauss–Newton with the least-norm step, the car's lengths as the first guess."""
+    jac = np.zeros((3, n))
+    res = np.zeros(3)
+    sign = np.empty(n)
+    for k in range(n):
+        sign[k] = 1.0 if lens[k] >= 0.0 else -1.0
+    for _ in range(12):
+        ex, ey, eyaw = _rolled_end(x, y, yaw, roll, groll, turns, lens, n, radius, rho, max_roll)
+        res[0], res[1], res[2] = ex - gx, ey - gy, rho * wrap(eyaw - gyaw)
+        if math.hypot(res[0], res[1]) < 1e-4 and abs(res[2]) < 1e-4 * rho:
+            return True
+        for k in range(n):
+            lens[k] += sign[k] * 1e-6
+            fx, fy, fyaw = _rolled_end(x, y, yaw, roll, groll, turns, lens, n, radius, rho, max_roll)
+            lens[k] -= sign[k] * 1e-6
+            jac[0, k], jac[1, k], jac[2, k] = (fx - ex) / 1e-6, (fy - ey) / 1e-6, rho * wrap(fyaw - eyaw) / 1e-6
+        a = jac @ jac.T + 1e-12 * np.eye(3)
+        step = jac.T @ np.linalg.solve(a, res)
+        for k in range(n):
+            lens[k] = sign[k] * max(0.0, abs(lens[k]) - step[k])
+    return False
+
+
+@njit(cache=True)
 def try_shot(
     clear: np.ndarray, blocked: np.ndarray, p: np.ndarray, offx: np.ndarray, offy: np.ndarray, px: np.ndarray,
     py: np.ndarray,
     x: float, y: float, yaw: float, roll: float, gx: float, gy: float, gyaw: float, groll: float,
     seg_roll: np.ndarray, seg_curv: np.ndarray, seg_len: np.ndarray, max_len: float, min_margin: float,
+    kind: int = 0,
 ) -> int:
     """Analytic expansion from (x, y, yaw, roll) to (gx, gy, gyaw) arriving with roll ``groll``.
 
-    A Dubins path at the minimum radius is turned into roll-held segments (±φmax on arcs, 0 on straights).
-    Each roll change shifts the centre sideways (eq. 1), so the Dubins target is corrected by fixed-point
-    iteration until the rolled end lands on the goal (< 0.1 mm). Returns the number of segments written,
-    or 0 when no valid shot keeps a footprint margin of at least ``min_margin`` (0 = collision-free).
+    A Dubins path (forward only, ``kind`` :data:`SHOT_DUBINS`) or a Reeds–Shepp path (the cheapest under the
+    search's reverse and cusp weights, :data:`SHOT_WEIGHTED`, or the shortest, :data:`SHOT_SHORTEST`) at the
+    minimum radius is turned into roll-held segments (±φmax on arcs, 0 on straights; signed lengths, < 0 rolling
+    backwards). Each roll change shifts the centre sideways (eq. 1): a Reeds–Shepp word of three or more segments
+    keeps the car's word and has its lengths solved (Gauss–Newton) so that the rolled end lands on the goal;
+    otherwise (Dubins, shorter words, or no landing) the car's target is corrected by fixed-point iteration until
+    the rolled end lands (< 0.1 mm). Returns the number of segments written, or 0 when no valid shot keeps a
+    footprint margin of at least ``min_margin`` (0 = collision-free) and is shorter than ``max_len``.
     """
     radius, rho, max_roll = p[P_RADIUS], p[P_RHO], p[P_MAX_ROLL]
-    tx, ty = gx, gy
+    turns = np.zeros(RS_MAX_SEGS, dtype=np.int64)
+    lens = np.zeros(RS_MAX_SEGS)
     ok = False
     n = 0
-    for _ in range(8):
-        word, t, pp, q = dubins_shortest(x, y, yaw, tx, ty, gyaw, rho)
-        if word < 0:
+    if kind != SHOT_DUBINS:
+        n = _shot_word(p, kind, x, y, yaw, gx, gy, gyaw, turns, lens)
+        if n == 0:
+            return 0
+        length = 0.0
+        for k in range(n):
+            length += abs(lens[k])
+        if length >= max_len:  # the car's length is within a few sideways shifts of the sphere's
+            return 0
+        if 3 <= n <= seg_roll.size and _land(x, y, yaw, roll, gx, gy, gyaw, groll, turns, lens, n, radius, rho,
+                                             max_roll):
+            for k in range(n):
+                seg_roll[k] = turns[k] * max_roll
+                seg_curv[k] = turns[k] / rho
+                seg_len[k] = lens[k]
+            ok = True
+    tx, ty = gx, gy
+    for _ in range(0 if ok else 8):
+        # move the car's target until the rolled sphere lands (the word may change on the way)
+        n = _shot_word(p, kind, x, y, yaw, tx, ty, gyaw, turns, lens)
+        if n == 0 or n > seg_roll.size:
             return 0
         cx, cy, cyaw, croll = x, y, yaw, roll
-        n = 0
-        lens = (t * rho, pp * rho, q * rho)
-        for k in range(3):
-            if lens[k] < 1e-9:
-                continue
-            turn = WORD_TURNS[word, k]
+        for k in range(n):
+            turn = turns[k]
             r_k = turn * max_roll
-            seg_roll[n] = r_k
-            seg_curv[n] = turn / rho
-            seg_len[n] = lens[k]
-            n += 1
+            seg_roll[k] = r_k
+            seg_curv[k] = turn / rho
+            seg_len[k] = lens[k]
             cx, cy = roll_shift(cx, cy, cyaw, radius, r_k - croll)
             cx, cy, cyaw = arc_step(cx, cy, cyaw, turn / rho, lens[k])
             croll = r_k
@@ -294,6 +388,56 @@ def shortcut(
 
 
 @njit(cache=True)
+def _backwards(node_f: np.ndarray, node_i: np.ndarray, k: int, step: float, seg_len: np.ndarray, n: int
+               ) -> tuple[float, float]:
+    """Metres rolled backwards and in all (sideways shifts left out) along the path to node ``k`` and then
+    the ``n`` shot segments."""
+    back = 0.0
+    total = 0.0
+    while node_i[k, 0] >= 0:
+        total += step
+        if node_i[k, 2] < 0:
+            back += step
+        k = node_i[k, 0]
+    for m in range(n):
+        total += abs(seg_len[m])
+        if seg_len[m] < 0.0:
+            back -= seg_len[m]
+    return back, total
+
+
+@njit(cache=True)
+def _shot_cost(p: np.ndarray, parent_dir: int, seg_len: np.ndarray, n: int) -> float:
+    """The search's direction-weighted cost of ``n`` shot segments after a motion in direction ``parent_dir``:
+    backward metres × reverse multiplier, a switch cost per change of direction."""
+    cost = 0.0
+    last = parent_dir
+    for m in range(n):
+        s = seg_len[m]
+        if abs(s) < 1e-12:
+            continue
+        d = 1 if s > 0.0 else -1
+        cost += abs(s) * (p[P_REVERSE] if d < 0 else 1.0)
+        if last != 0 and d != last:
+            cost += p[P_SWITCH]
+        last = d
+    return cost
+
+
+@njit(cache=True)
+def take_held(counters: np.ndarray, seg_roll: np.ndarray, seg_curv: np.ndarray, seg_len: np.ndarray) -> None:
+    """Make the held-back shot (3c) the result."""
+    n = counters[C_HELD_SEGS]
+    for m in range(n):
+        seg_roll[m] = seg_roll[MAX_SHOT_SEGS + m]
+        seg_curv[m] = seg_curv[MAX_SHOT_SEGS + m]
+        seg_len[m] = seg_len[MAX_SHOT_SEGS + m]
+    counters[C_RESULT] = counters[C_HELD_NODE]
+    counters[C_SHOT_SEGS] = n
+    counters[C_HELD_SEGS] = 0
+
+
+@njit(cache=True)
 def search_chunk(
     clear: np.ndarray, blocked: np.ndarray, htab: np.ndarray, rs: np.ndarray, p: np.ndarray, offx: np.ndarray,
     offy: np.ndarray, px: np.ndarray, py: np.ndarray,
@@ -315,9 +459,14 @@ def search_chunk(
     greed = p[P_GREED]
     goal_margin = _motion_margin(clear, blocked, p, offx, offy, px, py, p[P_GX], p[P_GY], p[P_GYAW], 0.0, 0.0, 0.0,
                                  math.inf)
+    goal_pose_margin = _pose_margin(clear, blocked, p, offx, offy, px, py, p[P_GX], p[P_GY], p[P_GYAW])
     done = 0
     while done < max_expansions:
-        # 1. Pop the cheapest open node; skip it if its (cell, yaw bin, roll) was already expanded.
+        # 1. Pop the cheapest open node; skip it if its (cell, yaw bin, roll) was already expanded. (A shot held
+        #    back, 3c, is taken once its wait is over or nothing is left to expand.)
+        if counters[C_HELD_SEGS] > 0 and (heap_size[0] == 0 or counters[C_EXPANSIONS] >= counters[C_HELD_UNTIL]):
+            take_held(counters, seg_roll, seg_curv, seg_len)
+            return FOUND
         if heap_size[0] == 0:
             return EXHAUSTED
         if counters[C_NODES] + 2 * n_roll >= node_f.shape[0] or heap_size[0] + 2 * n_roll >= heap_keys.size:
@@ -340,7 +489,7 @@ def search_chunk(
             return FOUND
         # 3. Analytic expansion every N expansions, N shrinking as the goal gets closer (Nav2's rule).
         h_here = _heuristic(htab, rs, p, x, y, yaw)
-        if h_here < p[P_BEST_H]:  # the driver tries Reeds–Shepp shots from the closest node between chunks
+        if h_here < p[P_BEST_H]:  # the closest node so far (3b shoots from it)
             p[P_BEST_H] = h_here
             counters[C_BEST] = k
         counters[C_SINCE_SHOT] += 1
@@ -357,6 +506,50 @@ def search_chunk(
                 counters[C_RESULT] = k
                 counters[C_SHOT_SEGS] = n
                 return FOUND
+        src = -1
+        if (allow_reverse and h_here < 0.9 * p[P_CLOSER_H]
+                and math.hypot(x - p[P_GX], y - p[P_GY]) < MAX_SHOT_M):
+            # 3b. Reeds–Shepp (reversing), from each node a tenth closer to the goal (by h) than the last one shot
+            #     from (the start first) ...
+            p[P_CLOSER_H] = h_here
+            src = k
+        elif allow_reverse and counters[C_EXPANSIONS] % BEST_SHOT_EVERY == 0 and counters[C_BEST] != counters[C_TRIED]:
+            # ... and every BEST_SHOT_EVERY expansions from the closest node so far when it is a new one
+            src = counters[C_BEST]
+        if src >= 0:
+            # the cheapest word under the search's reverse and cusp weights, else the shortest (up to MAX_SHOT_M)
+            counters[C_TRIED] = src
+            sx, sy, syaw, sroll = node_f[src, 0], node_f[src, 1], node_f[src, 2], node_f[src, 3]
+            # (the footprint margins of both ends themselves: a motion of length 0 samples no pose)
+            here = _pose_margin(clear, blocked, p, offx, offy, px, py, sx, sy, syaw)
+            keep = max(0.0, min(p[P_PREFERRED], here, goal_pose_margin))
+            n = 0
+            for kind in (SHOT_WEIGHTED, SHOT_SHORTEST):
+                n = try_shot(clear, blocked, p, offx, offy, px, py, sx, sy, syaw, sroll, p[P_GX], p[P_GY], p[P_GYAW],
+                             0.0, seg_roll, seg_curv, seg_len, MAX_SHOT_M, keep, kind)
+                if n > 0:
+                    break
+            if n > 0:
+                back, total = _backwards(node_f, node_i, src, step, seg_len, n)
+                if back <= p[P_BACK_SHARE] * total:
+                    counters[C_RESULT] = src
+                    counters[C_SHOT_SEGS] = n
+                    return FOUND
+                # 3c. A shot that would make the path roll mostly backwards is held back: the search goes on for
+                #     as many expansions again (at least HOLD_MIN_EXPANSIONS) looking for a path that turns round,
+                #     and takes the cheapest held shot when it finds none (or runs dry).
+                cost = node_f[src, 4] + _shot_cost(p, node_i[src, 2], seg_len, n)
+                if cost < p[P_HELD_COST]:
+                    p[P_HELD_COST] = cost
+                    counters[C_HELD_NODE] = src
+                    counters[C_HELD_SEGS] = n
+                    for m in range(n):
+                        seg_roll[MAX_SHOT_SEGS + m] = seg_roll[m]
+                        seg_curv[MAX_SHOT_SEGS + m] = seg_curv[m]
+                        seg_len[MAX_SHOT_SEGS + m] = seg_len[m]
+                    if counters[C_HELD_UNTIL] == 0:
+                        counters[C_HELD_UNTIL] = counters[C_EXPANSIONS] + max(HOLD_MIN_EXPANSIONS,
+                                                                              counters[C_EXPANSIONS])
         # 4. Expand: every held roll, forward (and reverse), one exact step of eq. 1.
         parent_dir = node_i[k, 2]
         for d in range(2):
