@@ -39,7 +39,7 @@ N_COUNTERS = 10
 N_PARAMS = 38
 BEST_SHOT_EVERY = 256  # reversing: every this many expansions, a Reeds–Shepp shot from the closest node if new
 MAX_SHOT_SEGS = 6  # a Dubins shot has 3 segments, a Reeds–Shepp shot up to 5
-HOLD_MIN_EXPANSIONS = 4000  # a held-back shot waits at least this many expansions (and as many as came before)
+HOLD_EXPANSIONS = 4000  # a held-back shot waits this many expansions for a path that rolls forwards more
 
 
 @njit(cache=True)
@@ -536,7 +536,7 @@ def search_chunk(
                     counters[C_SHOT_SEGS] = n
                     return FOUND
                 # 3c. A shot that would make the path roll mostly backwards is held back: the search goes on for
-                #     as many expansions again (at least HOLD_MIN_EXPANSIONS) looking for a path that turns round,
+                #     HOLD_EXPANSIONS more expansions looking for a path that turns round,
                 #     and takes the cheapest held shot when it finds none (or runs dry).
                 cost = node_f[src, 4] + _shot_cost(p, node_i[src, 2], seg_len, n)
                 if cost < p[P_HELD_COST]:
@@ -548,8 +548,7 @@ def search_chunk(
                         seg_curv[MAX_SHOT_SEGS + m] = seg_curv[m]
                         seg_len[MAX_SHOT_SEGS + m] = seg_len[m]
                     if counters[C_HELD_UNTIL] == 0:
-                        counters[C_HELD_UNTIL] = counters[C_EXPANSIONS] + max(HOLD_MIN_EXPANSIONS,
-                                                                              counters[C_EXPANSIONS])
+                        counters[C_HELD_UNTIL] = counters[C_EXPANSIONS] + HOLD_EXPANSIONS
         # 4. Expand: every held roll, forward (and reverse), one exact step of eq. 1.
         parent_dir = node_i[k, 2]
         for d in range(2):

@@ -159,8 +159,8 @@ def test_a_mostly_backwards_shot_is_held_back_while_the_search_goes_on() -> None
     start, goal = (12.0, 0.75, 0.0), (4.0, 0.75, 0.0)
     run = _Search(planner, start, goal, planner.holonomic(goal[:2], start[:2]), planner.options, True)
     assert run.step(100_000) == kernels.FOUND
-    assert run.counters[kernels.C_HELD_UNTIL] == 1 + kernels.HOLD_MIN_EXPANSIONS  # held at the first expansion
-    assert run.counters[kernels.C_SHOT_SEGS] == 0 and run.expansions < kernels.HOLD_MIN_EXPANSIONS
+    assert run.counters[kernels.C_HELD_UNTIL] == 1 + kernels.HOLD_EXPANSIONS  # held at the first expansion
+    assert run.counters[kernels.C_SHOT_SEGS] == 0 and run.expansions < kernels.HOLD_EXPANSIONS
 
 
 def test_the_held_back_shot_is_the_path_when_the_search_runs_out() -> None:
