@@ -35,8 +35,8 @@ N_COUNTERS = 10
 (P_OX, P_OY, P_RES, P_RC, P_HOX, P_HOY, P_HCELL, P_RHO, P_GX, P_GY, P_GYAW, P_TOL_XY, P_TOL_YAW, P_RADIUS,
  P_STEP, P_SPACING, P_NON_STRAIGHT, P_CHANGE, P_REVERSE, P_SWITCH, P_COST_PENALTY, P_PROX_RANGE, P_GREED,
  P_SHOT_RATIO, P_MAX_ROLL, P_USE_DUBINS, P_ALLOW_REVERSE, P_N_YAW, P_USE_RS, P_RS_CELL, P_RS_HALF,
- P_PREFERRED, P_REACH, P_BEST_H, P_REJECT, P_CLOSER_H, P_HELD_COST, P_BACK_SHARE) = range(38)
-N_PARAMS = 38
+ P_PREFERRED, P_REACH, P_BEST_H, P_REJECT, P_CLOSER_H, P_HELD_COST, P_BACK_SHARE, P_BOUND) = range(39)
+N_PARAMS = 39
 BEST_SHOT_EVERY = 256  # reversing: every this many expansions, a Reeds–Shepp shot from the closest node if new
 MAX_SHOT_SEGS = 6  # a Dubins shot has 3 segments, a Reeds–Shepp shot up to 5
 HOLD_EXPANSIONS = 4000  # a held-back shot waits this many expansions for a path that rolls forwards more
@@ -586,6 +586,8 @@ def search_chunk(
                 if parent_dir != 0 and parent_dir != direction:
                     travel += p[P_SWITCH]
                 cg = g + travel
+                if cg + h > p[P_BOUND]:  # no cheaper than a path already known (h never exceeds the cost-to-go)
+                    continue
                 c = counters[C_NODES]
                 node_f[c, 0] = cx
                 node_f[c, 1] = cy

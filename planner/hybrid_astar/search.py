@@ -221,6 +221,7 @@ class _Search:
         p[kernels.P_CLOSER_H] = math.inf
         p[kernels.P_HELD_COST] = math.inf
         p[kernels.P_BACK_SHARE] = FORWARD_RETRY_SHARE
+        p[kernels.P_BOUND] = math.inf
         self.p = p
         grid = planner.grid
         n_keys = grid.width * grid.height * o.n_yaw_bins * planner.n_roll_bins
@@ -432,7 +433,8 @@ class HybridAStar:
         analytic = int(run.counters[kernels.C_SHOT_SEGS])
         expansions = run.expansions
         if self.reverse and o.prefer_forward:
-            fwd, forward = self._forward_alternative(start, goal, heur, o, clock, motions, run.expansions)
+            fwd, forward = self._forward_alternative(start, goal, heur, o, clock, motions, run.expansions,
+                                                     self._search_cost(run))
             if fwd is not None:
                 expansions += fwd.expansions
                 extra["forward_alternative_expansions"] = fwd.expansions
@@ -536,7 +538,7 @@ class HybridAStar:
 
     def _forward_alternative(
         self, start: Pose, goal: Pose, heur: HolonomicHeuristic, o: PlannerOptions, clock: Clock,
-        motions: list[tuple[float, float, float]], expansions: int,
+        motions: list[tuple[float, float, float]], expansions: int, bound: float = math.inf,
     ) -> tuple[_Search | None, list[tuple[float, float, float]] | None]:
         """The forward-only search run (None when not tried) and its path when it costs less than ``motions``
         by :meth:`_travel_cost` (else None).
@@ -556,6 +558,7 @@ class HybridAStar:
         if dubins_distance(*start, *goal, self.robot.min_turning_radius_m) >= cost:
             return None, None
         run = _Search(self, start, goal, heur, o, False)
+        run.p[kernels.P_BOUND] = bound
         try:
             self._drive(run, start, goal, o, clock, fail_fast=False, cap=max(FORWARD_RETRY_MIN, expansions))
         except PlannerCancelled:
@@ -564,6 +567,12 @@ class HybridAStar:
             return run, None
         forward = self._smooth(start, self._motions(run), run.p, o)
         return run, (forward if self._travel_cost(start, forward, o) < cost else None)
+
+    def _search_cost(self, run: _Search) -> float:
+        """A lower bound of the search's own cost (g) of the path ``run`` found: the result node's g and the
+        analytic shot's length with its reverse and switch terms (its proximity and turning terms left out)."""
+        k, n = int(run.counters[kernels.C_RESULT]), int(run.counters[kernels.C_SHOT_SEGS])
+        return float(run.node_f[k, 4]) + float(kernels._shot_cost(run.p, int(run.node_i[k, 2]), run.seg_len, n))
 
     def _reverse_search(self, start: Pose, goal: Pose, o: PlannerOptions, clock: Clock) -> int | None:
         """Search the reverse problem within :data:`GOAL_CHECK_BUDGET` expansions: from the goal to the start

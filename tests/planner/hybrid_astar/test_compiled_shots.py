@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 
 from planner.hybrid_astar import kernels
+from planner.hybrid_astar.dubins import dubins_distance
 from planner.hybrid_astar.reeds_shepp import (
     MAX_SEGS,
     MAX_WORDS,
@@ -171,3 +172,29 @@ def test_the_held_back_shot_is_the_path_when_the_search_runs_out() -> None:
     assert check_path(grid, ROBOT, result.states, start, goal) == []
     assert result.analytic_segments > 0 and result.expansions == 20
     assert _backwards_m(result.states) > 0.95 * result.length_m
+
+
+def test_a_bound_prunes_what_cannot_be_cheaper() -> None:
+    """The forward-only alternative is given the first path's cost as a bound: with a bound below the cheapest
+    forward path the search exhausts without expanding past it; with a bound above it, it finds the path."""
+    grid = OccupancyGrid.from_occupied(np.zeros((120, 200), bool) | _walls(120, 200), 0.05, name="room")
+    planner = HybridAStar(grid, ROBOT, PlannerOptions(allow_reverse=False))
+    start, goal = (3.0, 3.0, 0.0), (7.0, 3.0, math.pi)  # a U-turn: at least the Dubins distance
+    heur = planner.holonomic(goal[:2], start[:2])
+    free = _Search(planner, start, goal, heur, planner.options, False)
+    assert free.step(200_000) == kernels.FOUND
+    cost = planner._search_cost(free)
+    dubins = dubins_distance(*start, *goal, ROBOT.min_turning_radius_m)
+    assert dubins < cost
+    for bound, status in ((0.9 * dubins, kernels.EXHAUSTED), (cost + 1.0, kernels.FOUND)):
+        run = _Search(planner, start, goal, heur, planner.options, False)
+        run.p[kernels.P_BOUND] = bound
+        assert run.step(200_000) == status
+    assert run.expansions <= free.expansions + 1
+
+
+def _walls(h: int, w: int) -> np.ndarray:
+    occ = np.zeros((h, w), bool)
+    occ[:2] = occ[-2:] = True
+    occ[:, :2] = occ[:, -2:] = True
+    return occ
