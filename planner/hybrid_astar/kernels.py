@@ -72,17 +72,12 @@ def _pose_margin(
 
 
 @njit(cache=True)
-def _motion_margin(
+def _shift_margin(
     clear: np.ndarray, blocked: np.ndarray, p: np.ndarray, offx: np.ndarray, offy: np.ndarray, px: np.ndarray,
-    py: np.ndarray, x: float, y: float, yaw: float, d_roll: float, curv: float, s: float, worst_so_far: float,
+    py: np.ndarray, x: float, y: float, yaw: float, d_roll: float, worst_so_far: float,
 ) -> float:
-    """Smallest footprint margin (m) along a roll change then an arc (the covering circles' margin, or 0 where
-    only the exact polygon fits; negative = collision).
-
-    Poses are sampled at most p[P_SPACING] apart, farther where there is room: with margin m > 0 the circles
-    stay clear while their centres move less than m, and a centre moves at most (1 + |κ|·reach) per metre
-    travelled (reach = the farthest circle centre from the robot's centre).
-    """
+    """The roll-change part of :func:`_motion_margin`: the smallest margin while the shell rolls sideways by
+    r·``d_roll`` (returns as soon as it is negative)."""
     radius, spacing = p[P_RADIUS], p[P_SPACING]
     worst = worst_so_far
     shift = abs(radius * d_roll)
@@ -97,7 +92,17 @@ def _motion_margin(
             if worst < 0.0:
                 return worst
         advance = max(spacing, m)
-    x1, y1 = roll_shift(x, y, yaw, radius, d_roll)
+    return worst
+
+
+@njit(cache=True)
+def _arc_margin(
+    clear: np.ndarray, blocked: np.ndarray, p: np.ndarray, offx: np.ndarray, offy: np.ndarray, px: np.ndarray,
+    py: np.ndarray, x1: float, y1: float, yaw: float, curv: float, s: float, worst_so_far: float,
+) -> float:
+    """The arc part of :func:`_motion_margin`, from (x1, y1, yaw) after the roll change."""
+    spacing = p[P_SPACING]
+    worst = worst_so_far
     length = abs(s)
     factor = 1.0 + abs(curv) * p[P_REACH]
     t = 0.0
@@ -112,6 +117,25 @@ def _motion_margin(
                 return worst
         advance = max(spacing, m / factor)
     return worst
+
+
+@njit(cache=True)
+def _motion_margin(
+    clear: np.ndarray, blocked: np.ndarray, p: np.ndarray, offx: np.ndarray, offy: np.ndarray, px: np.ndarray,
+    py: np.ndarray, x: float, y: float, yaw: float, d_roll: float, curv: float, s: float, worst_so_far: float,
+) -> float:
+    """Smallest footprint margin (m) along a roll change then an arc (the covering circles' margin, or 0 where
+    only the exact polygon fits; negative = collision).
+
+    Poses are sampled at most p[P_SPACING] apart, farther where there is room: with margin m > 0 the circles
+    stay clear while their centres move less than m, and a centre moves at most (1 + |κ|·reach) per metre
+    travelled (reach = the farthest circle centre from the robot's centre).
+    """
+    worst = _shift_margin(clear, blocked, p, offx, offy, px, py, x, y, yaw, d_roll, worst_so_far)
+    if worst < 0.0:
+        return worst
+    x1, y1 = roll_shift(x, y, yaw, p[P_RADIUS], d_roll)
+    return _arc_margin(clear, blocked, p, offx, offy, px, py, x1, y1, yaw, curv, s, worst)
 
 
 @njit(cache=True)
@@ -460,6 +484,7 @@ def search_chunk(
     goal_margin = _motion_margin(clear, blocked, p, offx, offy, px, py, p[P_GX], p[P_GY], p[P_GYAW], 0.0, 0.0, 0.0,
                                  math.inf)
     goal_pose_margin = _pose_margin(clear, blocked, p, offx, offy, px, py, p[P_GX], p[P_GY], p[P_GYAW])
+    shift_worst = np.empty(n_roll)  # per held roll: the margin of the roll change from the node expanded
     done = 0
     while done < max_expansions:
         # 1. Pop the cheapest open node; skip it if its (cell, yaw bin, roll) was already expanded. (A shot held
@@ -551,6 +576,7 @@ def search_chunk(
                         counters[C_HELD_UNTIL] = counters[C_EXPANSIONS] + HOLD_EXPANSIONS
         # 4. Expand: every held roll, forward (and reverse), one exact step of eq. 1.
         parent_dir = node_i[k, 2]
+        shift_worst[:] = math.nan
         for d in range(2):
             direction = 1 if d == 0 else -1
             if direction < 0 and not allow_reverse:
@@ -564,8 +590,15 @@ def search_chunk(
                 ckey = _closed_key(p, w, cx, cy, cyaw, roll_bins[ri], n_roll_bins)
                 if closed[ckey >> 3] & (1 << (ckey & 7)):
                     continue
-                margin = _motion_margin(clear, blocked, p, offx, offy, px, py, x, y, yaw, d_roll, curvs[ri],
-                                        direction * step, math.inf)
+                # the sweep of a roll change is the same forwards and backwards: done once per roll
+                if math.isnan(shift_worst[ri]):
+                    shift_worst[ri] = _shift_margin(clear, blocked, p, offx, offy, px, py, x, y, yaw, d_roll,
+                                                    math.inf)
+                if shift_worst[ri] < 0.0:
+                    continue
+                x1, y1 = roll_shift(x, y, yaw, radius, d_roll)
+                margin = _arc_margin(clear, blocked, p, offx, offy, px, py, x1, y1, yaw, curvs[ri], direction * step,
+                                     shift_worst[ri])
                 if margin < 0.0:
                     continue
                 h = _heuristic(htab, rs, p, cx, cy, cyaw)

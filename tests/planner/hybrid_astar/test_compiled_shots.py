@@ -198,3 +198,35 @@ def _walls(h: int, w: int) -> np.ndarray:
     occ[:2] = occ[-2:] = True
     occ[:, :2] = occ[:, -2:] = True
     return occ
+
+
+def test_a_motion_sweep_finds_every_collision_a_dense_sampling_finds() -> None:
+    """_motion_margin (roll-change sweep, then the arc from where the roll change ends) never calls a motion free
+    that a 2 mm sampling of the exact footprint finds in collision, and reports both outcomes near walls."""
+    grid = load_map("maps/garage.yaml")
+    planner = HybridAStar(grid, ROBOT)
+    p = planner._params((12.0, 23.55, math.pi), True)
+    cm, fp = planner.clearance, planner.footprint
+    r = ROBOT.radius_m
+    rng = np.random.default_rng(5)
+    outcomes = {True: 0, False: 0}
+    near = np.argwhere((cm.clearance > 0.2) & (cm.clearance < 0.5))
+    for _ in range(2500):
+        iy, ix = near[rng.integers(len(near))]
+        x, y = cm.origin_x + (ix + 0.5) * cm.resolution_m, cm.origin_y + (iy + 0.5) * cm.resolution_m
+        yaw = float(rng.uniform(-math.pi, math.pi))
+        if planner.footprint_margin((x, y, yaw)) < 0:  # a motion starts from a free pose
+            continue
+        roll0, roll1 = (float(v) for v in rng.choice(planner.rolls, 2))
+        curv = ROBOT.roll_model.curvature(roll1)
+        s = float(rng.choice([-1.0, 1.0]) * rng.uniform(0.05, 0.6))
+        swept = kernels._motion_margin(cm.clearance, cm.blocked, p, fp.offsets_x, fp.offsets_y, planner._px,
+                                       planner._py, x, y, yaw, roll1 - roll0, curv, s, math.inf)
+        poses = [(*child_pose(x, y, yaw, roll0, roll0 + f * (roll1 - roll0), 0.0, r, 0.0)[:2], yaw)
+                 for f in np.linspace(0.0, 1.0, 80)]
+        poses += [child_pose(x, y, yaw, roll0, roll1, curv, r, t) for t in np.linspace(0.0, s, 300)]
+        dense = cm.footprint_margins(fp, planner.polygon, np.array(poses)).min()
+        if dense < 0:
+            assert swept < 0
+        outcomes[swept >= 0] += 1
+    assert outcomes[True] > 100 and outcomes[False] > 100
