@@ -378,8 +378,12 @@ def shortcut(
     sl = np.zeros(MAX_SHOT_SEGS)
     count = 0
     i = 0
+    least = np.empty(n)  # least[j]: the smallest knot margin from knot i to knot j
     while i < n - 2:
         stride = max(1, (n - 2 - i) // max_tries)
+        least[i] = knot_margin[i]
+        for k in range(i + 1, n):
+            least[k] = min(least[k - 1], knot_margin[k])
         j = n - 1
         found = False
         while j > i + 1:
@@ -387,9 +391,7 @@ def shortcut(
             if math.hypot(knots[j, 0] - knots[i, 0], knots[j, 1] - knots[i, 1]) >= budget:
                 j -= stride
                 continue
-            stretch = p[P_PREFERRED]
-            for k in range(i, j + 1):
-                stretch = min(stretch, knot_margin[k])
+            stretch = min(p[P_PREFERRED], least[j])
             m = try_shot(clear, blocked, p, offx, offy, px, py, knots[i, 0], knots[i, 1], knots[i, 2],
                          knots[i, 3], knots[j, 0], knots[j, 1], knots[j, 2], knots[j, 3], sr, sc, sl, budget,
                          max(stretch, 0.0))
