@@ -7,9 +7,13 @@ tightest turn to change heading by one yaw bin). Nodes are closed on (cell, yaw 
 
 g sums length (sideways shifts included) × (1 + cost_penalty·proximity), a non-straight multiplier,
 a roll-change cost, a reverse multiplier and a direction-switch cost (eq. 14f, with Nav2 Smac's terms);
-h = max(holonomic cost-to-go with obstacles, Dubins distance at the minimum turning radius) (eq. 14g–i);
-f = g + h·(1 + greed) (eq. 14j). Every few expansions an analytic Dubins shot to the goal is tried,
-turned into roll-held segments whose sideways shifts are compensated, and collision-checked.
+h = max(holonomic cost-to-go with obstacles, Dubins distance at the minimum turning radius; the Reeds–Shepp
+distance near the goal with reversing) (eq. 14g–i); f = g + h·(1 + greed) (eq. 14j). Every few expansions an
+analytic Dubins shot to the goal is tried, turned into roll-held segments whose sideways shifts are compensated,
+and collision-checked. With reversing, compiled Reeds–Shepp shots (:mod:`planner.hybrid_astar.reeds_shepp`: the
+cheapest word under the reverse and cusp weights, else the shortest) are tried from each node a tenth closer to
+the goal and every 256 expansions from the closest node; a shot that would make the path roll mostly backwards is
+held back for a few thousand expansions while the search looks for a path that turns round.
 
 The loop runs compiled (:mod:`planner.hybrid_astar.kernels`) in chunks; between chunks this driver checks the
 deadline, the iteration cap and cancellation, and grows the node storage.
@@ -17,7 +21,7 @@ deadline, the iteration cap and cancellation, and grows the node storage.
 Algorithm outline (numbered like the compiled loop):
  1. pop the cheapest open node; skip it if its (cell, yaw bin, roll) key is closed, else close it;
  2. goal test (after returning the roll to 0);
- 3. analytic expansion every max(1, h / ratio) expansions;
+ 3. analytic expansion: Dubins every max(1, h / ratio) expansions, Reeds–Shepp as above (3b, 3c);
  4. expand children (each roll, forward and optionally reverse), collision-checked at ≤ half a cell;
  5. cost them and push them.
 """
