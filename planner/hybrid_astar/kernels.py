@@ -240,10 +240,27 @@ def _land(x: float, y: float, yaw: float, roll: float, gx: float, gy: float, gya
             fx, fy, fyaw = _rolled_end(x, y, yaw, roll, groll, turns, lens, n, radius, rho, max_roll)
             lens[k] -= sign[k] * 1e-6
             jac[0, k], jac[1, k], jac[2, k] = (fx - ex) / 1e-6, (fy - ey) / 1e-6, rho * wrap(fyaw - eyaw) / 1e-6
-        a = jac @ jac.T + 1e-12 * np.eye(3)
-        step = jac.T @ np.linalg.solve(a, res)
+        # least-norm step jac^T (jac jac^T)^-1 res, the 3×3 solve written out (np.linalg costs seconds of compiling)
+        a = np.empty((3, 3))
+        for i in range(3):
+            for j in range(3):
+                acc = 1e-12 if i == j else 0.0
+                for k in range(n):
+                    acc += jac[i, k] * jac[j, k]
+                a[i, j] = acc
+        det = (a[0, 0] * (a[1, 1] * a[2, 2] - a[1, 2] * a[2, 1]) - a[0, 1] * (a[1, 0] * a[2, 2] - a[1, 2] * a[2, 0])
+               + a[0, 2] * (a[1, 0] * a[2, 1] - a[1, 1] * a[2, 0]))
+        if det == 0.0 or not math.isfinite(det):
+            return False
+        z0 = (res[0] * (a[1, 1] * a[2, 2] - a[1, 2] * a[2, 1]) - a[0, 1] * (res[1] * a[2, 2] - a[1, 2] * res[2])
+              + a[0, 2] * (res[1] * a[2, 1] - a[1, 1] * res[2])) / det
+        z1 = (a[0, 0] * (res[1] * a[2, 2] - a[1, 2] * res[2]) - res[0] * (a[1, 0] * a[2, 2] - a[1, 2] * a[2, 0])
+              + a[0, 2] * (a[1, 0] * res[2] - res[1] * a[2, 0])) / det
+        z2 = (a[0, 0] * (a[1, 1] * res[2] - res[1] * a[2, 1]) - a[0, 1] * (a[1, 0] * res[2] - res[1] * a[2, 0])
+              + res[0] * (a[1, 0] * a[2, 1] - a[1, 1] * a[2, 0])) / det
         for k in range(n):
-            lens[k] = sign[k] * max(0.0, abs(lens[k]) - step[k])
+            step = jac[0, k] * z0 + jac[1, k] * z1 + jac[2, k] * z2
+            lens[k] = sign[k] * max(0.0, abs(lens[k]) - step)
     return False
 
 
