@@ -20,12 +20,12 @@ from numba import njit
 from planner.hybrid_astar.dubins import WORD_TURNS, dubins_distance, dubins_shortest
 from planner.hybrid_astar.heap import heap_pop, heap_push
 from planner.hybrid_astar.reeds_shepp import MAX_SEGS as RS_MAX_SEGS
-from planner.hybrid_astar.reeds_shepp import MAX_SHOT_M, rs_best
+from planner.hybrid_astar.reeds_shepp import MAX_SHOT_M, rs_best, rs_ranked
 from planner.kinematics import arc_step, roll_shift, wrap
 from planner.maps.clearance import circle_margin, footprint_hits
 
 RUNNING, FOUND, EXHAUSTED, FULL = 0, 1, 2, 3
-SHOT_DUBINS, SHOT_WEIGHTED, SHOT_SHORTEST = 0, 1, 2  # analytic shot kinds (try_shot)
+SHOT_DUBINS, SHOT_WEIGHTED, SHOT_SHORTEST, SHOT_SECOND, SHOT_THIRD = 0, 1, 2, 3, 4  # analytic shot kinds (try_shot)
 
 # counters[] slots
 C_NODES, C_EXPANSIONS, C_SINCE_SHOT, C_RESULT, C_SHOT_SEGS, C_BEST, C_TRIED = 0, 1, 2, 3, 4, 5, 6
@@ -38,6 +38,7 @@ N_COUNTERS = 10
  P_PREFERRED, P_REACH, P_BEST_H, P_REJECT, P_CLOSER_H, P_HELD_COST, P_BACK_SHARE, P_BOUND) = range(39)
 N_PARAMS = 39
 BEST_SHOT_EVERY = 256  # reversing: every this many expansions, a Reeds–Shepp shot from the closest node if new
+NEAR_TIE = 1.05  # the second / third cheapest Reeds–Shepp word is shot only within this ratio of the cheapest
 MAX_SHOT_SEGS = 6  # a Dubins shot has 3 segments, a Reeds–Shepp shot up to 5
 HOLD_EXPANSIONS = 4000  # a held-back shot waits this many expansions for a path that rolls forwards more
 
@@ -184,13 +185,18 @@ def _shot_word(p: np.ndarray, kind: int, x: float, y: float, yaw: float, tx: flo
                gyaw: float, turns: np.ndarray, lens: np.ndarray) -> int:
     """The car's word from (x, y, yaw) to (tx, ty, gyaw): segment turns (+1, 0, −1) and signed lengths (m).
     ``kind`` :data:`SHOT_DUBINS`, :data:`SHOT_WEIGHTED` (the cheapest Reeds–Shepp word under the search's reverse
-    and cusp weights) or :data:`SHOT_SHORTEST` (the shortest Reeds–Shepp word); 0 = none."""
+    and cusp weights), :data:`SHOT_SHORTEST` (the shortest Reeds–Shepp word), :data:`SHOT_SECOND` /
+    :data:`SHOT_THIRD` (the second / third cheapest under the weights, if within NEAR_TIE of the cheapest); 0 = none."""
     rho = p[P_RHO]
     if kind == SHOT_WEIGHTED:
         n, _ = rs_best(x, y, yaw, tx, ty, gyaw, rho, p[P_REVERSE], p[P_SWITCH], turns, lens)
         return n
     if kind == SHOT_SHORTEST:
         n, _ = rs_best(x, y, yaw, tx, ty, gyaw, rho, 1.0, 0.0, turns, lens)
+        return n
+    if kind == SHOT_SECOND or kind == SHOT_THIRD:
+        n, _ = rs_ranked(x, y, yaw, tx, ty, gyaw, rho, p[P_REVERSE], p[P_SWITCH], kind - SHOT_WEIGHTED, turns, lens,
+                         NEAR_TIE)
         return n
     word, t, pp, q = dubins_shortest(x, y, yaw, tx, ty, gyaw, rho)
     if word < 0:
@@ -561,14 +567,15 @@ def search_chunk(
             # ... and every BEST_SHOT_EVERY expansions from the closest node so far when it is a new one
             src = counters[C_BEST]
         if src >= 0:
-            # the cheapest word under the search's reverse and cusp weights, else the shortest (up to MAX_SHOT_M)
+            # the cheapest word under the search's reverse and cusp weights, else the shortest, else the second and
+            # third cheapest (mirror-image words of nearly the same cost sweep other ground), up to MAX_SHOT_M
             counters[C_TRIED] = src
             sx, sy, syaw, sroll = node_f[src, 0], node_f[src, 1], node_f[src, 2], node_f[src, 3]
             # (the footprint margins of both ends themselves: a motion of length 0 samples no pose)
             here = _pose_margin(clear, blocked, p, offx, offy, px, py, sx, sy, syaw)
             keep = max(0.0, min(p[P_PREFERRED], here, goal_pose_margin))
             n = 0
-            for kind in (SHOT_WEIGHTED, SHOT_SHORTEST):
+            for kind in (SHOT_WEIGHTED, SHOT_SHORTEST, SHOT_SECOND, SHOT_THIRD):
                 n = try_shot(clear, blocked, p, offx, offy, px, py, sx, sy, syaw, sroll, p[P_GX], p[P_GY], p[P_GYAW],
                              0.0, seg_roll, seg_curv, seg_len, MAX_SHOT_M, keep, kind)
                 if n > 0:

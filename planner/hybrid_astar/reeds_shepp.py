@@ -230,6 +230,42 @@ def _local(x0: float, y0: float, yaw0: float, x1: float, y1: float, yaw1: float,
 
 
 @njit(cache=True)
+def rs_ranked(x0: float, y0: float, yaw0: float, x1: float, y1: float, yaw1: float, rho: float,
+              reverse_penalty: float, switch_cost: float, rank: int, seg_turn: np.ndarray, seg_len: np.ndarray,
+              max_ratio: float = math.inf) -> tuple[int, float]:
+    """The ``rank``-th cheapest candidate word (0 = the cheapest) under the weights, the forward-only Dubins word
+    among them, written like :func:`rs_best`; (0, inf) when there are not that many or it costs more than
+    ``max_ratio`` × the cheapest. Near-ties (mirror-image words of almost the same cost) make the second and third
+    cheapest worth a shot when the first collides."""
+    x, y, phi = _local(x0, y0, yaw0, x1, y1, yaw1, rho)
+    turns = np.full((MAX_WORDS + 1, MAX_SEGS), 2, dtype=np.int64)
+    lens = np.zeros((MAX_WORDS + 1, MAX_SEGS))
+    n = rs_words(x, y, phi, turns, lens)
+    word, t, p, q = dubins_shortest(0.0, 0.0, 0.0, x, y, phi, 1.0)
+    if word >= 0:
+        for s in range(MAX_SEGS):
+            turns[n, s] = WORD_TURNS[word, s] if s < 3 else 2
+            lens[n, s] = (t, p, q)[s] if s < 3 else 0.0
+        n += 1
+    if rank >= n:
+        return 0, math.inf
+    costs = np.empty(n)
+    for k in range(n):
+        costs[k] = word_cost(lens[k], rho, reverse_penalty, switch_cost)
+    order = np.argsort(costs, kind="mergesort")
+    best_k = order[rank]
+    if costs[best_k] > max_ratio * costs[order[0]]:
+        return 0, math.inf
+    m = 0
+    for s in range(MAX_SEGS):
+        if turns[best_k, s] != 2 and abs(lens[best_k, s]) > 1e-12:
+            seg_turn[m] = turns[best_k, s]
+            seg_len[m] = lens[best_k, s] * rho
+            m += 1
+    return m, costs[best_k]
+
+
+@njit(cache=True)
 def rs_best(x0: float, y0: float, yaw0: float, x1: float, y1: float, yaw1: float, rho: float,
             reverse_penalty: float, switch_cost: float, seg_turn: np.ndarray, seg_len: np.ndarray
             ) -> tuple[int, float]:

@@ -13,6 +13,7 @@ from planner.hybrid_astar.reeds_shepp import (
     MAX_WORDS,
     rs_best,
     rs_distance,
+    rs_ranked,
     rs_words,
     word_cost,
 )
@@ -230,3 +231,32 @@ def test_a_motion_sweep_finds_every_collision_a_dense_sampling_finds() -> None:
             assert swept < 0
         outcomes[swept >= 0] += 1
     assert outcomes[True] > 100 and outcomes[False] > 100
+
+
+def test_ranked_words_are_the_next_cheapest_and_end_on_the_goal() -> None:
+    """rs_ranked: rank 0 costs what rs_best's word costs, later ranks cost no less and end on the goal too, and a
+    rank costing more than max_ratio × the cheapest is not offered (the search shoots only near-ties)."""
+    rho = ROBOT.min_turning_radius_m
+    rng = np.random.default_rng(12)
+    t0, l0 = np.zeros(MAX_SEGS, dtype=np.int64), np.zeros(MAX_SEGS)
+    t, seg = np.zeros(MAX_SEGS, dtype=np.int64), np.zeros(MAX_SEGS)
+    refused = 0
+    for _ in range(500):
+        goal = (float(rng.uniform(-4, 4)), float(rng.uniform(-4, 4)), float(rng.uniform(-math.pi, math.pi)))
+        _, best = rs_best(0.0, 0.0, 0.0, *goal, rho, 1.2, 1.0, t0, l0)
+        last = best
+        for rank in range(3):
+            n, cost = rs_ranked(0.0, 0.0, 0.0, *goal, rho, 1.2, 1.0, rank, t, seg)
+            assert n > 0 and cost >= last - 1e-9
+            if rank == 0:
+                assert cost == pytest.approx(best, abs=1e-9)
+            ex, ey, eth = _integrate(t[:n], seg[:n] / rho)
+            assert math.hypot(ex * rho - goal[0], ey * rho - goal[1]) < 1e-6
+            assert abs(math.remainder(eth - goal[2], 2 * math.pi)) < 1e-6
+            last = cost
+        n, cost = rs_ranked(0.0, 0.0, 0.0, *goal, rho, 1.2, 1.0, 2, t, seg, 1.05)
+        if n == 0:
+            refused += 1
+        else:
+            assert cost <= 1.05 * best + 1e-9
+    assert refused > 50
