@@ -19,20 +19,105 @@ from numba import njit
 
 from planner.hybrid_astar.dubins import WORD_TURNS, dubins_distance, dubins_shortest
 from planner.hybrid_astar.heap import heap_pop, heap_push
+from planner.hybrid_astar.reeds_shepp import MAX_SEGS as RS_MAX_SEGS
+from planner.hybrid_astar.reeds_shepp import MAX_SHOT_M, rs_best, rs_ranked
 from planner.kinematics import arc_step, roll_shift, wrap
-from planner.maps.clearance import footprint_margin
+from planner.maps.clearance import circle_margin, footprint_hits
 
 RUNNING, FOUND, EXHAUSTED, FULL = 0, 1, 2, 3
+SHOT_DUBINS, SHOT_WEIGHTED, SHOT_SHORTEST, SHOT_SECOND, SHOT_THIRD = 0, 1, 2, 3, 4  # analytic shot kinds (try_shot)
 
 # counters[] slots
-C_NODES, C_EXPANSIONS, C_SINCE_SHOT, C_RESULT, C_SHOT_SEGS, C_BEST = 0, 1, 2, 3, 4, 5
+C_NODES, C_EXPANSIONS, C_SINCE_SHOT, C_RESULT, C_SHOT_SEGS, C_BEST, C_TRIED = 0, 1, 2, 3, 4, 5, 6
+C_HELD_NODE, C_HELD_SEGS, C_HELD_UNTIL = 7, 8, 9  # a mostly-backwards shot held back (see search_chunk, 3c)
+N_COUNTERS = 10
 # params[] slots (float64)
 (P_OX, P_OY, P_RES, P_RC, P_HOX, P_HOY, P_HCELL, P_RHO, P_GX, P_GY, P_GYAW, P_TOL_XY, P_TOL_YAW, P_RADIUS,
  P_STEP, P_SPACING, P_NON_STRAIGHT, P_CHANGE, P_REVERSE, P_SWITCH, P_COST_PENALTY, P_PROX_RANGE, P_GREED,
  P_SHOT_RATIO, P_MAX_ROLL, P_USE_DUBINS, P_ALLOW_REVERSE, P_N_YAW, P_USE_RS, P_RS_CELL, P_RS_HALF,
- P_PREFERRED, P_REACH, P_BEST_H) = range(34)
-N_PARAMS = 34
+ P_PREFERRED, P_REACH, P_BEST_H, P_REJECT, P_CLOSER_H, P_HELD_COST, P_BACK_SHARE, P_BOUND) = range(39)
+N_PARAMS = 39
+BEST_SHOT_EVERY = 256  # reversing: every this many expansions, a Reeds–Shepp shot from the closest node if new
+NEAR_TIE = 1.05  # the second / third cheapest Reeds–Shepp word is shot only within this ratio of the cheapest
 MAX_SHOT_SEGS = 6  # a Dubins shot has 3 segments, a Reeds–Shepp shot up to 5
+HOLD_EXPANSIONS = 4000  # a held-back shot waits this many expansions for a path that rolls forwards more
+
+
+@njit(cache=True)
+def _pose_margin(
+    clear: np.ndarray, blocked: np.ndarray, p: np.ndarray, offx: np.ndarray, offy: np.ndarray, px: np.ndarray,
+    py: np.ndarray, x: float, y: float, yaw: float,
+) -> float:
+    """:func:`planner.maps.clearance.footprint_margin` (the same value at every pose), with one shortcut: where
+    the robot's centre is so close to a blocked cell that the cell meets the disc inscribed in the footprint,
+    the pose collides and the exact polygon test is skipped.
+
+    The stored clearance of the centre's cell is d − √2·res (d: its centre to the nearest blocked cell's
+    centre), so that blocked cell is at most d + res/√2 from the robot's centre; p[P_REJECT] is
+    r_in − (√2 + 1/√2)·res less a micrometre (r_in: the inscribed radius), and a stored clearance below it
+    proves the hit.
+    """
+    ox, oy, res = p[P_OX], p[P_OY], p[P_RES]
+    m = circle_margin(clear, ox, oy, res, x, y, yaw, offx, offy, p[P_RC])
+    if m >= 0.0:
+        return m
+    hit = m if m > -1e9 else -1e9
+    ix = int(math.floor((x - ox) / res))
+    iy = int(math.floor((y - oy) / res))
+    h, w = clear.shape
+    if 0 <= ix < w and 0 <= iy < h and clear[iy, ix] < p[P_REJECT]:
+        return hit
+    if footprint_hits(blocked, ox, oy, res, x, y, yaw, px, py):
+        return hit
+    return 0.0
+
+
+@njit(cache=True)
+def _shift_margin(
+    clear: np.ndarray, blocked: np.ndarray, p: np.ndarray, offx: np.ndarray, offy: np.ndarray, px: np.ndarray,
+    py: np.ndarray, x: float, y: float, yaw: float, d_roll: float, worst_so_far: float,
+) -> float:
+    """The roll-change part of :func:`_motion_margin`: the smallest margin while the shell rolls sideways by
+    r·``d_roll`` (returns as soon as it is negative)."""
+    radius, spacing = p[P_RADIUS], p[P_SPACING]
+    worst = worst_so_far
+    shift = abs(radius * d_roll)
+    t = 0.0
+    advance = spacing
+    while t < shift:
+        t = min(shift, t + advance)
+        xs, ys = roll_shift(x, y, yaw, radius, math.copysign(t / radius, d_roll))
+        m = _pose_margin(clear, blocked, p, offx, offy, px, py, xs, ys, yaw)
+        if m < worst:
+            worst = m
+            if worst < 0.0:
+                return worst
+        advance = max(spacing, m)
+    return worst
+
+
+@njit(cache=True)
+def _arc_margin(
+    clear: np.ndarray, blocked: np.ndarray, p: np.ndarray, offx: np.ndarray, offy: np.ndarray, px: np.ndarray,
+    py: np.ndarray, x1: float, y1: float, yaw: float, curv: float, s: float, worst_so_far: float,
+) -> float:
+    """The arc part of :func:`_motion_margin`, from (x1, y1, yaw) after the roll change."""
+    spacing = p[P_SPACING]
+    worst = worst_so_far
+    length = abs(s)
+    factor = 1.0 + abs(curv) * p[P_REACH]
+    t = 0.0
+    advance = spacing
+    while t < length:
+        t = min(length, t + advance)
+        xa, ya, ya2 = arc_step(x1, y1, yaw, curv, math.copysign(t, s))
+        m = _pose_margin(clear, blocked, p, offx, offy, px, py, xa, ya, ya2)
+        if m < worst:
+            worst = m
+            if worst < 0.0:
+                return worst
+        advance = max(spacing, m / factor)
+    return worst
 
 
 @njit(cache=True)
@@ -47,35 +132,11 @@ def _motion_margin(
     stay clear while their centres move less than m, and a centre moves at most (1 + |κ|·reach) per metre
     travelled (reach = the farthest circle centre from the robot's centre).
     """
-    ox, oy, res, r_c, radius, spacing = p[P_OX], p[P_OY], p[P_RES], p[P_RC], p[P_RADIUS], p[P_SPACING]
-    worst = worst_so_far
-    shift = abs(radius * d_roll)
-    t = 0.0
-    advance = spacing
-    while t < shift:
-        t = min(shift, t + advance)
-        xs, ys = roll_shift(x, y, yaw, radius, math.copysign(t / radius, d_roll))
-        m = footprint_margin(clear, blocked, ox, oy, res, xs, ys, yaw, offx, offy, r_c, px, py)
-        if m < worst:
-            worst = m
-            if worst < 0.0:
-                return worst
-        advance = max(spacing, m)
-    x1, y1 = roll_shift(x, y, yaw, radius, d_roll)
-    length = abs(s)
-    factor = 1.0 + abs(curv) * p[P_REACH]
-    t = 0.0
-    advance = spacing
-    while t < length:
-        t = min(length, t + advance)
-        xa, ya, ya2 = arc_step(x1, y1, yaw, curv, math.copysign(t, s))
-        m = footprint_margin(clear, blocked, ox, oy, res, xa, ya, ya2, offx, offy, r_c, px, py)
-        if m < worst:
-            worst = m
-            if worst < 0.0:
-                return worst
-        advance = max(spacing, m / factor)
-    return worst
+    worst = _shift_margin(clear, blocked, p, offx, offy, px, py, x, y, yaw, d_roll, worst_so_far)
+    if worst < 0.0:
+        return worst
+    x1, y1 = roll_shift(x, y, yaw, p[P_RADIUS], d_roll)
+    return _arc_margin(clear, blocked, p, offx, offy, px, py, x1, y1, yaw, curv, s, worst)
 
 
 @njit(cache=True)
@@ -120,39 +181,148 @@ def _closed_key(p: np.ndarray, w: int, x: float, y: float, yaw: float, rb: int, 
 
 
 @njit(cache=True)
+def _shot_word(p: np.ndarray, kind: int, x: float, y: float, yaw: float, tx: float, ty: float,
+               gyaw: float, turns: np.ndarray, lens: np.ndarray) -> int:
+    """The car's word from (x, y, yaw) to (tx, ty, gyaw): segment turns (+1, 0, −1) and signed lengths (m).
+    ``kind`` :data:`SHOT_DUBINS`, :data:`SHOT_WEIGHTED` (the cheapest Reeds–Shepp word under the search's reverse
+    and cusp weights), :data:`SHOT_SHORTEST` (the shortest Reeds–Shepp word), :data:`SHOT_SECOND` /
+    :data:`SHOT_THIRD` (the second / third cheapest under the weights, if within NEAR_TIE of the cheapest); 0 = none."""
+    rho = p[P_RHO]
+    if kind == SHOT_WEIGHTED:
+        n, _ = rs_best(x, y, yaw, tx, ty, gyaw, rho, p[P_REVERSE], p[P_SWITCH], turns, lens)
+        return n
+    if kind == SHOT_SHORTEST:
+        n, _ = rs_best(x, y, yaw, tx, ty, gyaw, rho, 1.0, 0.0, turns, lens)
+        return n
+    if kind == SHOT_SECOND or kind == SHOT_THIRD:
+        n, _ = rs_ranked(x, y, yaw, tx, ty, gyaw, rho, p[P_REVERSE], p[P_SWITCH], kind - SHOT_WEIGHTED, turns, lens,
+                         NEAR_TIE)
+        return n
+    word, t, pp, q = dubins_shortest(x, y, yaw, tx, ty, gyaw, rho)
+    if word < 0:
+        return 0
+    n = 0
+    for k in range(3):
+        length = (t, pp, q)[k] * rho
+        if length < 1e-9:
+            continue
+        turns[n] = WORD_TURNS[word, k]
+        lens[n] = length
+        n += 1
+    return n
+
+
+@njit(cache=True)
+def _rolled_end(x: float, y: float, yaw: float, roll: float, groll: float, turns: np.ndarray, lens: np.ndarray,
+                n: int, radius: float, rho: float, max_roll: float) -> tuple[float, float, float]:
+    """Where the sphere ends after rolling the word (each arc held at ±φmax, straights upright), then ``groll``."""
+    cx, cy, cyaw, croll = x, y, yaw, roll
+    for k in range(n):
+        r_k = turns[k] * max_roll
+        cx, cy = roll_shift(cx, cy, cyaw, radius, r_k - croll)
+        cx, cy, cyaw = arc_step(cx, cy, cyaw, turns[k] / rho, lens[k])
+        croll = r_k
+    cx, cy = roll_shift(cx, cy, cyaw, radius, groll - croll)
+    return cx, cy, cyaw
+
+
+@njit(cache=True)
+def _land(x: float, y: float, yaw: float, roll: float, gx: float, gy: float, gyaw: float, groll: float,
+          turns: np.ndarray, lens: np.ndarray, n: int, radius: float, rho: float, max_roll: float) -> bool:
+    """Solve the word's segment lengths (signs kept, magnitudes ≥ 0) so that the rolled sphere lands on the goal
+    (< 0.1 mm, < 1e-4 rad): Gauss–Newton with the least-norm step, the car's lengths as the first guess."""
+    jac = np.zeros((3, n))
+    res = np.zeros(3)
+    sign = np.empty(n)
+    for k in range(n):
+        sign[k] = 1.0 if lens[k] >= 0.0 else -1.0
+    for _ in range(12):
+        ex, ey, eyaw = _rolled_end(x, y, yaw, roll, groll, turns, lens, n, radius, rho, max_roll)
+        res[0], res[1], res[2] = ex - gx, ey - gy, rho * wrap(eyaw - gyaw)
+        if math.hypot(res[0], res[1]) < 1e-4 and abs(res[2]) < 1e-4 * rho:
+            return True
+        for k in range(n):
+            lens[k] += sign[k] * 1e-6
+            fx, fy, fyaw = _rolled_end(x, y, yaw, roll, groll, turns, lens, n, radius, rho, max_roll)
+            lens[k] -= sign[k] * 1e-6
+            jac[0, k], jac[1, k], jac[2, k] = (fx - ex) / 1e-6, (fy - ey) / 1e-6, rho * wrap(fyaw - eyaw) / 1e-6
+        # least-norm step jac^T (jac jac^T)^-1 res, the 3×3 solve written out (np.linalg costs seconds of compiling)
+        a = np.empty((3, 3))
+        for i in range(3):
+            for j in range(3):
+                acc = 1e-12 if i == j else 0.0
+                for k in range(n):
+                    acc += jac[i, k] * jac[j, k]
+                a[i, j] = acc
+        det = (a[0, 0] * (a[1, 1] * a[2, 2] - a[1, 2] * a[2, 1]) - a[0, 1] * (a[1, 0] * a[2, 2] - a[1, 2] * a[2, 0])
+               + a[0, 2] * (a[1, 0] * a[2, 1] - a[1, 1] * a[2, 0]))
+        if det == 0.0 or not math.isfinite(det):
+            return False
+        z0 = (res[0] * (a[1, 1] * a[2, 2] - a[1, 2] * a[2, 1]) - a[0, 1] * (res[1] * a[2, 2] - a[1, 2] * res[2])
+              + a[0, 2] * (res[1] * a[2, 1] - a[1, 1] * res[2])) / det
+        z1 = (a[0, 0] * (res[1] * a[2, 2] - a[1, 2] * res[2]) - res[0] * (a[1, 0] * a[2, 2] - a[1, 2] * a[2, 0])
+              + a[0, 2] * (a[1, 0] * res[2] - res[1] * a[2, 0])) / det
+        z2 = (a[0, 0] * (a[1, 1] * res[2] - res[1] * a[2, 1]) - a[0, 1] * (a[1, 0] * res[2] - res[1] * a[2, 0])
+              + res[0] * (a[1, 0] * a[2, 1] - a[1, 1] * a[2, 0])) / det
+        for k in range(n):
+            step = jac[0, k] * z0 + jac[1, k] * z1 + jac[2, k] * z2
+            lens[k] = sign[k] * max(0.0, abs(lens[k]) - step)
+    return False
+
+
+@njit(cache=True)
 def try_shot(
     clear: np.ndarray, blocked: np.ndarray, p: np.ndarray, offx: np.ndarray, offy: np.ndarray, px: np.ndarray,
     py: np.ndarray,
     x: float, y: float, yaw: float, roll: float, gx: float, gy: float, gyaw: float, groll: float,
     seg_roll: np.ndarray, seg_curv: np.ndarray, seg_len: np.ndarray, max_len: float, min_margin: float,
+    kind: int = 0,
 ) -> int:
     """Analytic expansion from (x, y, yaw, roll) to (gx, gy, gyaw) arriving with roll ``groll``.
 
-    A Dubins path at the minimum radius is turned into roll-held segments (±φmax on arcs, 0 on straights).
-    Each roll change shifts the centre sideways (eq. 1), so the Dubins target is corrected by fixed-point
-    iteration until the rolled end lands on the goal (< 0.1 mm). Returns the number of segments written,
-    or 0 when no valid shot keeps a footprint margin of at least ``min_margin`` (0 = collision-free).
+    A Dubins path (forward only, ``kind`` :data:`SHOT_DUBINS`) or a Reeds–Shepp path (the cheapest under the
+    search's reverse and cusp weights, :data:`SHOT_WEIGHTED`, or the shortest, :data:`SHOT_SHORTEST`) at the
+    minimum radius is turned into roll-held segments (±φmax on arcs, 0 on straights; signed lengths, < 0 rolling
+    backwards). Each roll change shifts the centre sideways (eq. 1): a Reeds–Shepp word of three or more segments
+    keeps the car's word and has its lengths solved (Gauss–Newton) so that the rolled end lands on the goal;
+    otherwise (Dubins, shorter words, or no landing) the car's target is corrected by fixed-point iteration until
+    the rolled end lands (< 0.1 mm). Returns the number of segments written, or 0 when no valid shot keeps a
+    footprint margin of at least ``min_margin`` (0 = collision-free) and is shorter than ``max_len``.
     """
     radius, rho, max_roll = p[P_RADIUS], p[P_RHO], p[P_MAX_ROLL]
-    tx, ty = gx, gy
+    turns = np.zeros(RS_MAX_SEGS, dtype=np.int64)
+    lens = np.zeros(RS_MAX_SEGS)
     ok = False
     n = 0
-    for _ in range(8):
-        word, t, pp, q = dubins_shortest(x, y, yaw, tx, ty, gyaw, rho)
-        if word < 0:
+    if kind != SHOT_DUBINS:
+        n = _shot_word(p, kind, x, y, yaw, gx, gy, gyaw, turns, lens)
+        if n == 0:
+            return 0
+        length = 0.0
+        for k in range(n):
+            length += abs(lens[k])
+        if length >= max_len:  # the car's length is within a few sideways shifts of the sphere's
+            return 0
+        if 3 <= n <= seg_roll.size and _land(x, y, yaw, roll, gx, gy, gyaw, groll, turns, lens, n, radius, rho,
+                                             max_roll):
+            for k in range(n):
+                seg_roll[k] = turns[k] * max_roll
+                seg_curv[k] = turns[k] / rho
+                seg_len[k] = lens[k]
+            ok = True
+    tx, ty = gx, gy
+    for _ in range(0 if ok else 8):
+        # move the car's target until the rolled sphere lands (the word may change on the way)
+        n = _shot_word(p, kind, x, y, yaw, tx, ty, gyaw, turns, lens)
+        if n == 0 or n > seg_roll.size:
             return 0
         cx, cy, cyaw, croll = x, y, yaw, roll
-        n = 0
-        lens = (t * rho, pp * rho, q * rho)
-        for k in range(3):
-            if lens[k] < 1e-9:
-                continue
-            turn = WORD_TURNS[word, k]
+        for k in range(n):
+            turn = turns[k]
             r_k = turn * max_roll
-            seg_roll[n] = r_k
-            seg_curv[n] = turn / rho
-            seg_len[n] = lens[k]
-            n += 1
+            seg_roll[k] = r_k
+            seg_curv[k] = turn / rho
+            seg_len[k] = lens[k]
             cx, cy = roll_shift(cx, cy, cyaw, radius, r_k - croll)
             cx, cy, cyaw = arc_step(cx, cy, cyaw, turn / rho, lens[k])
             croll = r_k
@@ -231,8 +401,12 @@ def shortcut(
     sl = np.zeros(MAX_SHOT_SEGS)
     count = 0
     i = 0
+    least = np.empty(n)  # least[j]: the smallest knot margin from knot i to knot j
     while i < n - 2:
         stride = max(1, (n - 2 - i) // max_tries)
+        least[i] = knot_margin[i]
+        for k in range(i + 1, n):
+            least[k] = min(least[k - 1], knot_margin[k])
         j = n - 1
         found = False
         while j > i + 1:
@@ -240,9 +414,7 @@ def shortcut(
             if math.hypot(knots[j, 0] - knots[i, 0], knots[j, 1] - knots[i, 1]) >= budget:
                 j -= stride
                 continue
-            stretch = p[P_PREFERRED]
-            for k in range(i, j + 1):
-                stretch = min(stretch, knot_margin[k])
+            stretch = min(p[P_PREFERRED], least[j])
             m = try_shot(clear, blocked, p, offx, offy, px, py, knots[i, 0], knots[i, 1], knots[i, 2],
                          knots[i, 3], knots[j, 0], knots[j, 1], knots[j, 2], knots[j, 3], sr, sc, sl, budget,
                          max(stretch, 0.0))
@@ -262,6 +434,56 @@ def shortcut(
         if not found:
             i += 1
     return count
+
+
+@njit(cache=True)
+def _backwards(node_f: np.ndarray, node_i: np.ndarray, k: int, step: float, seg_len: np.ndarray, n: int
+               ) -> tuple[float, float]:
+    """Metres rolled backwards and in all (sideways shifts left out) along the path to node ``k`` and then
+    the ``n`` shot segments."""
+    back = 0.0
+    total = 0.0
+    while node_i[k, 0] >= 0:
+        total += step
+        if node_i[k, 2] < 0:
+            back += step
+        k = node_i[k, 0]
+    for m in range(n):
+        total += abs(seg_len[m])
+        if seg_len[m] < 0.0:
+            back -= seg_len[m]
+    return back, total
+
+
+@njit(cache=True)
+def _shot_cost(p: np.ndarray, parent_dir: int, seg_len: np.ndarray, n: int) -> float:
+    """The search's direction-weighted cost of ``n`` shot segments after a motion in direction ``parent_dir``:
+    backward metres × reverse multiplier, a switch cost per change of direction."""
+    cost = 0.0
+    last = parent_dir
+    for m in range(n):
+        s = seg_len[m]
+        if abs(s) < 1e-12:
+            continue
+        d = 1 if s > 0.0 else -1
+        cost += abs(s) * (p[P_REVERSE] if d < 0 else 1.0)
+        if last != 0 and d != last:
+            cost += p[P_SWITCH]
+        last = d
+    return cost
+
+
+@njit(cache=True)
+def take_held(counters: np.ndarray, seg_roll: np.ndarray, seg_curv: np.ndarray, seg_len: np.ndarray) -> None:
+    """Make the held-back shot (3c) the result."""
+    n = counters[C_HELD_SEGS]
+    for m in range(n):
+        seg_roll[m] = seg_roll[MAX_SHOT_SEGS + m]
+        seg_curv[m] = seg_curv[MAX_SHOT_SEGS + m]
+        seg_len[m] = seg_len[MAX_SHOT_SEGS + m]
+    counters[C_RESULT] = counters[C_HELD_NODE]
+    counters[C_SHOT_SEGS] = n
+    counters[C_HELD_SEGS] = 0
 
 
 @njit(cache=True)
@@ -286,9 +508,15 @@ def search_chunk(
     greed = p[P_GREED]
     goal_margin = _motion_margin(clear, blocked, p, offx, offy, px, py, p[P_GX], p[P_GY], p[P_GYAW], 0.0, 0.0, 0.0,
                                  math.inf)
+    goal_pose_margin = _pose_margin(clear, blocked, p, offx, offy, px, py, p[P_GX], p[P_GY], p[P_GYAW])
+    shift_worst = np.empty(n_roll)  # per held roll: the margin of the roll change from the node expanded
     done = 0
     while done < max_expansions:
-        # 1. Pop the cheapest open node; skip it if its (cell, yaw bin, roll) was already expanded.
+        # 1. Pop the cheapest open node; skip it if its (cell, yaw bin, roll) was already expanded. (A shot held
+        #    back, 3c, is taken once its wait is over or nothing is left to expand.)
+        if counters[C_HELD_SEGS] > 0 and (heap_size[0] == 0 or counters[C_EXPANSIONS] >= counters[C_HELD_UNTIL]):
+            take_held(counters, seg_roll, seg_curv, seg_len)
+            return FOUND
         if heap_size[0] == 0:
             return EXHAUSTED
         if counters[C_NODES] + 2 * n_roll >= node_f.shape[0] or heap_size[0] + 2 * n_roll >= heap_keys.size:
@@ -311,7 +539,7 @@ def search_chunk(
             return FOUND
         # 3. Analytic expansion every N expansions, N shrinking as the goal gets closer (Nav2's rule).
         h_here = _heuristic(htab, rs, p, x, y, yaw)
-        if h_here < p[P_BEST_H]:  # the driver tries Reeds–Shepp shots from the closest node between chunks
+        if h_here < p[P_BEST_H]:  # the closest node so far (3b shoots from it)
             p[P_BEST_H] = h_here
             counters[C_BEST] = k
         counters[C_SINCE_SHOT] += 1
@@ -328,23 +556,76 @@ def search_chunk(
                 counters[C_RESULT] = k
                 counters[C_SHOT_SEGS] = n
                 return FOUND
+        src = -1
+        if (allow_reverse and h_here < 0.9 * p[P_CLOSER_H]
+                and math.hypot(x - p[P_GX], y - p[P_GY]) < MAX_SHOT_M):
+            # 3b. Reeds–Shepp (reversing), from each node a tenth closer to the goal (by h) than the last one shot
+            #     from (the start first) ...
+            p[P_CLOSER_H] = h_here
+            src = k
+        elif allow_reverse and counters[C_EXPANSIONS] % BEST_SHOT_EVERY == 0 and counters[C_BEST] != counters[C_TRIED]:
+            # ... and every BEST_SHOT_EVERY expansions from the closest node so far when it is a new one
+            src = counters[C_BEST]
+        if src >= 0:
+            # the cheapest word under the search's reverse and cusp weights, else the shortest, else the second and
+            # third cheapest (mirror-image words of nearly the same cost sweep other ground), up to MAX_SHOT_M
+            counters[C_TRIED] = src
+            sx, sy, syaw, sroll = node_f[src, 0], node_f[src, 1], node_f[src, 2], node_f[src, 3]
+            # (the footprint margins of both ends themselves: a motion of length 0 samples no pose)
+            here = _pose_margin(clear, blocked, p, offx, offy, px, py, sx, sy, syaw)
+            keep = max(0.0, min(p[P_PREFERRED], here, goal_pose_margin))
+            n = 0
+            for kind in (SHOT_WEIGHTED, SHOT_SHORTEST, SHOT_SECOND, SHOT_THIRD):
+                n = try_shot(clear, blocked, p, offx, offy, px, py, sx, sy, syaw, sroll, p[P_GX], p[P_GY], p[P_GYAW],
+                             0.0, seg_roll, seg_curv, seg_len, MAX_SHOT_M, keep, kind)
+                if n > 0:
+                    break
+            if n > 0:
+                back, total = _backwards(node_f, node_i, src, step, seg_len, n)
+                if back <= p[P_BACK_SHARE] * total:
+                    counters[C_RESULT] = src
+                    counters[C_SHOT_SEGS] = n
+                    return FOUND
+                # 3c. A shot that would make the path roll mostly backwards is held back: the search goes on for
+                #     HOLD_EXPANSIONS more expansions looking for a path that turns round,
+                #     and takes the cheapest held shot when it finds none (or runs dry).
+                cost = node_f[src, 4] + _shot_cost(p, node_i[src, 2], seg_len, n)
+                if cost < p[P_HELD_COST]:
+                    p[P_HELD_COST] = cost
+                    counters[C_HELD_NODE] = src
+                    counters[C_HELD_SEGS] = n
+                    for m in range(n):
+                        seg_roll[MAX_SHOT_SEGS + m] = seg_roll[m]
+                        seg_curv[MAX_SHOT_SEGS + m] = seg_curv[m]
+                        seg_len[MAX_SHOT_SEGS + m] = seg_len[m]
+                    if counters[C_HELD_UNTIL] == 0:
+                        counters[C_HELD_UNTIL] = counters[C_EXPANSIONS] + HOLD_EXPANSIONS
         # 4. Expand: every held roll, forward (and reverse), one exact step of eq. 1.
         parent_dir = node_i[k, 2]
+        shift_worst[:] = math.nan
         for d in range(2):
             direction = 1 if d == 0 else -1
             if direction < 0 and not allow_reverse:
                 break
             for ri in range(n_roll):
                 d_roll = rolls[ri] - roll
-                margin = _motion_margin(clear, blocked, p, offx, offy, px, py, x, y, yaw, d_roll, curvs[ri],
-                                        direction * step, math.inf)
-                if margin < 0.0:
-                    continue
                 cx, cy = roll_shift(x, y, yaw, radius, d_roll)
                 cx, cy, cyaw = arc_step(cx, cy, yaw, curvs[ri], direction * step)
                 cyaw = wrap(cyaw)
+                # a child already expanded is dropped before its (far dearer) collision sweep
                 ckey = _closed_key(p, w, cx, cy, cyaw, roll_bins[ri], n_roll_bins)
                 if closed[ckey >> 3] & (1 << (ckey & 7)):
+                    continue
+                # the sweep of a roll change is the same forwards and backwards: done once per roll
+                if math.isnan(shift_worst[ri]):
+                    shift_worst[ri] = _shift_margin(clear, blocked, p, offx, offy, px, py, x, y, yaw, d_roll,
+                                                    math.inf)
+                if shift_worst[ri] < 0.0:
+                    continue
+                x1, y1 = roll_shift(x, y, yaw, radius, d_roll)
+                margin = _arc_margin(clear, blocked, p, offx, offy, px, py, x1, y1, yaw, curvs[ri], direction * step,
+                                     shift_worst[ri])
+                if margin < 0.0:
                     continue
                 h = _heuristic(htab, rs, p, cx, cy, cyaw)
                 if not math.isfinite(h):
@@ -364,6 +645,8 @@ def search_chunk(
                 if parent_dir != 0 and parent_dir != direction:
                     travel += p[P_SWITCH]
                 cg = g + travel
+                if cg + h > p[P_BOUND]:  # no cheaper than a path already known (h never exceeds the cost-to-go)
+                    continue
                 c = counters[C_NODES]
                 node_f[c, 0] = cx
                 node_f[c, 1] = cy

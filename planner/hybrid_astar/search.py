@@ -7,9 +7,13 @@ tightest turn to change heading by one yaw bin). Nodes are closed on (cell, yaw 
 
 g sums length (sideways shifts included) × (1 + cost_penalty·proximity), a non-straight multiplier,
 a roll-change cost, a reverse multiplier and a direction-switch cost (eq. 14f, with Nav2 Smac's terms);
-h = max(holonomic cost-to-go with obstacles, Dubins distance at the minimum turning radius) (eq. 14g–i);
-f = g + h·(1 + greed) (eq. 14j). Every few expansions an analytic Dubins shot to the goal is tried,
-turned into roll-held segments whose sideways shifts are compensated, and collision-checked.
+h = max(holonomic cost-to-go with obstacles, Dubins distance at the minimum turning radius; the Reeds–Shepp
+distance near the goal with reversing) (eq. 14g–i); f = g + h·(1 + greed) (eq. 14j). Every few expansions an
+analytic Dubins shot to the goal is tried, turned into roll-held segments whose sideways shifts are compensated,
+and collision-checked. With reversing, compiled Reeds–Shepp shots (:mod:`planner.hybrid_astar.reeds_shepp`: the
+cheapest word under the reverse and cusp weights, else the shortest) are tried from each node a tenth closer to
+the goal and every 256 expansions from the closest node; a shot that would make the path roll mostly backwards is
+held back for a few thousand expansions while the search looks for a path that turns round.
 
 The loop runs compiled (:mod:`planner.hybrid_astar.kernels`) in chunks; between chunks this driver checks the
 deadline, the iteration cap and cancellation, and grows the node storage.
@@ -17,7 +21,7 @@ deadline, the iteration cap and cancellation, and grows the node storage.
 Algorithm outline (numbered like the compiled loop):
  1. pop the cheapest open node; skip it if its (cell, yaw bin, roll) key is closed, else close it;
  2. goal test (after returning the roll to 0);
- 3. analytic expansion every max(1, h / ratio) expansions;
+ 3. analytic expansion: Dubins every max(1, h / ratio) expansions, Reeds–Shepp as above (3b, 3c);
  4. expand children (each roll, forward and optionally reverse), collision-checked at ≤ half a cell;
  5. cost them and push them.
 """
@@ -48,7 +52,6 @@ from planner.errors import (
 from planner.hybrid_astar import kernels
 from planner.hybrid_astar.dubins import dubins_distance
 from planner.hybrid_astar.heuristics import HolonomicHeuristic, auto_downsample, coarse_cost_grid, reeds_shepp_table
-from planner.hybrid_astar.reeds_shepp import sphere_shot
 from planner.kinematics import child_pose, densify_motions, wrap
 from planner.maps.clearance import CircleFootprint, ClearanceMap, inscribed_radius
 from planner.maps.reachability import refuse_unreachable
@@ -220,6 +223,10 @@ class _Search:
         p[kernels.P_HOX], p[kernels.P_HOY] = heur.origin_xy
         p[kernels.P_HCELL] = heur.cell_m
         p[kernels.P_BEST_H] = math.inf
+        p[kernels.P_CLOSER_H] = math.inf
+        p[kernels.P_HELD_COST] = math.inf
+        p[kernels.P_BACK_SHARE] = FORWARD_RETRY_SHARE
+        p[kernels.P_BOUND] = math.inf
         self.p = p
         grid = planner.grid
         n_keys = grid.width * grid.height * o.n_yaw_bins * planner.n_roll_bins
@@ -230,8 +237,10 @@ class _Search:
         self.heap_keys = np.empty(cap * 2)
         self.heap_vals = np.empty(cap * 2, dtype=np.int64)
         self.heap_size = np.zeros(1, dtype=np.int64)
-        self.counters = np.zeros(8, dtype=np.int64)
-        self.seg_roll, self.seg_curv, self.seg_len = (np.zeros(kernels.MAX_SHOT_SEGS) for _ in range(3))
+        self.counters = np.zeros(kernels.N_COUNTERS, dtype=np.int64)
+        self.counters[kernels.C_TRIED] = -1
+        # the shot found (first half) and a shot held back (second half, kernels.search_chunk 3c)
+        self.seg_roll, self.seg_curv, self.seg_len = (np.zeros(2 * kernels.MAX_SHOT_SEGS) for _ in range(3))
         self.node_f[0] = (*start, 0.0, 0.0)
         self.node_i[0] = (-1, o.n_rolls // 2, 0)
         self.counters[kernels.C_NODES] = 1
@@ -240,30 +249,6 @@ class _Search:
     @property
     def expansions(self) -> int:
         return int(self.counters[kernels.C_EXPANSIONS])
-
-    def reeds_shepp_shot(self, k: int) -> bool:
-        """Try a Reeds–Shepp shot from node ``k`` to the goal; on success record it as the result."""
-        pl, p = self.planner, self.p
-        x, y, yaw, roll = (float(v) for v in self.node_f[k, :4])
-        goal = (float(p[kernels.P_GX]), float(p[kernels.P_GY]), float(p[kernels.P_GYAW]))
-        motions = sphere_shot((x, y, yaw, roll), goal, pl.robot.min_turning_radius_m, pl.robot.max_roll_rad,
-                              pl.robot.radius_m)
-        if motions is None or len(motions) > kernels.MAX_SHOT_SEGS:
-            return False
-        n = len(motions)
-        seg = np.array(motions)
-        self.seg_roll[:n], self.seg_curv[:n], self.seg_len[:n] = seg[:, 0], seg[:, 1], seg[:, 2]
-        # like the compiled shots: keep the preferred clearance where both ends have it
-        keep = max(0.0, min(pl.robot.preferred_clearance_m, pl.footprint_margin((x, y, yaw)),
-                            pl.footprint_margin(goal)))
-        margin = kernels.shot_margin(pl.clearance.clearance, pl.clearance.blocked, p, pl.footprint.offsets_x,
-                                     pl.footprint.offsets_y, pl._px, pl._py, x, y, yaw, roll, self.seg_roll,
-                                     self.seg_curv, self.seg_len, n, 0.0, keep)
-        if margin < keep:
-            return False
-        self.counters[kernels.C_RESULT] = k
-        self.counters[kernels.C_SHOT_SEGS] = n
-        return True
 
     def step(self, budget: int) -> int:
         """Run up to ``budget`` expansions; returns the compiled loop's status (FULL is handled here)."""
@@ -394,6 +379,8 @@ class HybridAStar:
         p[kernels.P_PROX_RANGE] = max(o.proximity_range_m, self.robot.preferred_clearance_m)
         p[kernels.P_PREFERRED] = self.robot.preferred_clearance_m
         p[kernels.P_REACH] = float(np.hypot(self.footprint.offsets_x, self.footprint.offsets_y).max())
+        res = self.grid.resolution_m
+        p[kernels.P_REJECT] = inscribed_radius(self.polygon) - (math.sqrt(2.0) + math.sqrt(0.5)) * res - 1e-6
         p[kernels.P_GREED], p[kernels.P_SHOT_RATIO] = o.greed, o.analytic_ratio_m
         p[kernels.P_MAX_ROLL] = self.robot.max_roll_rad
         p[kernels.P_USE_DUBINS] = 0.0 if reverse else 1.0
@@ -452,7 +439,8 @@ class HybridAStar:
         analytic = int(run.counters[kernels.C_SHOT_SEGS])
         expansions = run.expansions
         if self.reverse and o.prefer_forward:
-            fwd, forward = self._forward_alternative(start, goal, heur, o, clock, motions, run.expansions)
+            fwd, forward = self._forward_alternative(start, goal, heur, o, clock, motions, run.expansions,
+                                                     self._search_cost(run))
             if fwd is not None:
                 expansions += fwd.expansions
                 extra["forward_alternative_expansions"] = fwd.expansions
@@ -489,17 +477,9 @@ class HybridAStar:
                fail_fast: bool = True, cap: int | None = None) -> None:
         """Run the search in compiled chunks until it finds the goal; raise the planning error otherwise."""
         checked_goal = not (fail_fast and o.dead_end_check)
-        tried_from = -1
         t0 = clock.t0
         cap = clock.termination.max_iterations if cap is None else min(cap, clock.termination.max_iterations)
         while True:
-            # 3b. Reeds–Shepp analytic expansion (reversing robots), from the start and then from the node
-            #     closest to the goal by the heuristic whenever that changes, between compiled chunks.
-            best = int(run.counters[kernels.C_BEST])
-            if run.reverse and best != tried_from:
-                tried_from = best
-                if run.reeds_shepp_shot(best):
-                    return
             status = run.step(min(self.chunk_expansions(o), cap - run.expansions))
             if status == kernels.FOUND:
                 return
@@ -519,6 +499,10 @@ class HybridAStar:
                         f"reached from only {back} states around it, none of them the start's (a dead end or a "
                         f"heading into an obstacle)", planning_time_s=time.perf_counter() - t0,
                         expansions=run.expansions)
+            if (run.expansions >= cap or clock.expired()) and run.counters[kernels.C_HELD_SEGS] > 0:
+                # out of time or expansions with a mostly-backwards shot held back: it is the path
+                kernels.take_held(run.counters, run.seg_roll, run.seg_curv, run.seg_len)
+                return
             if run.expansions >= cap:
                 raise NoValidPathFound(f"no valid path within the iteration cap of {cap} expansions",
                                        planning_time_s=time.perf_counter() - t0, expansions=run.expansions)
@@ -560,7 +544,7 @@ class HybridAStar:
 
     def _forward_alternative(
         self, start: Pose, goal: Pose, heur: HolonomicHeuristic, o: PlannerOptions, clock: Clock,
-        motions: list[tuple[float, float, float]], expansions: int,
+        motions: list[tuple[float, float, float]], expansions: int, bound: float = math.inf,
     ) -> tuple[_Search | None, list[tuple[float, float, float]] | None]:
         """The forward-only search run (None when not tried) and its path when it costs less than ``motions``
         by :meth:`_travel_cost` (else None).
@@ -580,6 +564,7 @@ class HybridAStar:
         if dubins_distance(*start, *goal, self.robot.min_turning_radius_m) >= cost:
             return None, None
         run = _Search(self, start, goal, heur, o, False)
+        run.p[kernels.P_BOUND] = bound
         try:
             self._drive(run, start, goal, o, clock, fail_fast=False, cap=max(FORWARD_RETRY_MIN, expansions))
         except PlannerCancelled:
@@ -588,6 +573,12 @@ class HybridAStar:
             return run, None
         forward = self._smooth(start, self._motions(run), run.p, o)
         return run, (forward if self._travel_cost(start, forward, o) < cost else None)
+
+    def _search_cost(self, run: _Search) -> float:
+        """A lower bound of the search's own cost (g) of the path ``run`` found: the result node's g and the
+        analytic shot's length with its reverse and switch terms (its proximity and turning terms left out)."""
+        k, n = int(run.counters[kernels.C_RESULT]), int(run.counters[kernels.C_SHOT_SEGS])
+        return float(run.node_f[k, 4]) + float(kernels._shot_cost(run.p, int(run.node_i[k, 2]), run.seg_len, n))
 
     def _reverse_search(self, start: Pose, goal: Pose, o: PlannerOptions, clock: Clock) -> int | None:
         """Search the reverse problem within :data:`GOAL_CHECK_BUDGET` expansions: from the goal to the start

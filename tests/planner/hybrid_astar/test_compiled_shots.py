@@ -1,0 +1,262 @@
+"""The compiled hot path of the search (#21): Reeds–Shepp words against OMPL, compiled shots that land the
+rolled sphere, the collision shortcut that skips the exact polygon, and mostly-backwards shots held back."""
+
+import math
+
+import numpy as np
+import pytest
+
+from planner.hybrid_astar import kernels
+from planner.hybrid_astar.dubins import dubins_distance
+from planner.hybrid_astar.reeds_shepp import (
+    MAX_SEGS,
+    MAX_WORDS,
+    rs_best,
+    rs_distance,
+    rs_ranked,
+    rs_words,
+    word_cost,
+)
+from planner.hybrid_astar.search import HybridAStar, PlannerOptions, _Search
+from planner.kinematics import child_pose
+from planner.maps.clearance import footprint_margin
+from planner.maps.load import load_map
+from planner.occupancy import OccupancyGrid
+from planner.robot import load_robot
+from planner.termination import Termination
+from tests.pathcheck import check_path
+
+ROBOT = load_robot("zju-60")
+
+
+def _integrate(turns: np.ndarray, lens: np.ndarray) -> tuple[float, float, float]:
+    """End pose (units of ρ) of a word from the origin, heading 0, by the arc formulas."""
+    x = y = th = 0.0
+    for t, length in zip(turns, lens, strict=True):
+        if t == 2:
+            continue
+        if t == 0:
+            x, y = x + length * math.cos(th), y + length * math.sin(th)
+        else:
+            x += t * (math.sin(th + t * length) - math.sin(th))
+            y += t * (math.cos(th) - math.cos(th + t * length))
+            th += t * length
+    return x, y, th
+
+
+@pytest.mark.parametrize("rho", [0.5, 1.12, 2.7])
+def test_compiled_reeds_shepp_distance_equals_ompl(rho: float) -> None:
+    from ompl import base as ob
+
+    space = ob.ReedsSheppStateSpace(rho)
+    a, b = space.allocState(), space.allocState()
+    rng = np.random.default_rng(int(rho * 100))
+    for _ in range(3000):
+        x0, y0, x1, y1 = rng.uniform(-5, 5, 4)
+        t0, t1 = rng.uniform(-math.pi, math.pi, 2)
+        a.setX(x0), a.setY(y0), a.setYaw(t0)
+        b.setX(x1), b.setY(y1), b.setYaw(t1)
+        assert rs_distance(x0, y0, t0, x1, y1, t1, rho) == pytest.approx(space.distance(a, b), abs=1e-6)
+
+
+def test_every_candidate_word_ends_on_its_goal() -> None:
+    rng = np.random.default_rng(3)
+    turns = np.empty((MAX_WORDS, MAX_SEGS), dtype=np.int64)
+    lens = np.empty((MAX_WORDS, MAX_SEGS))
+    seen = 0
+    for _ in range(1500):
+        x, y, phi = rng.uniform(-4, 4), rng.uniform(-4, 4), rng.uniform(-math.pi, math.pi)
+        n = rs_words(x, y, phi, turns, lens)
+        assert n >= 1
+        seen += n
+        for k in range(n):
+            ex, ey, eth = _integrate(turns[k], lens[k])
+            assert math.hypot(ex - x, ey - y) < 1e-7
+            assert abs(math.remainder(eth - phi, 2 * math.pi)) < 1e-7
+    assert seen > 5 * 1500  # many words per goal, not only the shortest
+
+
+def test_the_weighted_word_prices_reversing_and_cusps() -> None:
+    rho = ROBOT.min_turning_radius_m
+    turn, seg = np.zeros(MAX_SEGS, dtype=np.int64), np.zeros(MAX_SEGS)
+    # two metres straight behind: rolling back costs 2·1.2 ...
+    n, cost = rs_best(2.0, 0.0, 0.0, 0.0, 0.0, 0.0, rho, 1.2, 1.0, turn, seg)
+    assert cost == pytest.approx(2.4) and n == 1 and seg[0] == pytest.approx(-2.0)
+    # ... at a reverse multiplier of 10 the cheapest word no longer rolls back all the way
+    n, cost = rs_best(2.0, 0.0, 0.0, 0.0, 0.0, 0.0, rho, 10.0, 0.0, turn, seg)
+    assert cost < 20.0 and float(np.sum(np.clip(seg[:n], None, 0.0))) > -2.0
+    assert word_cost(np.array([1.0, -0.5, 0.0, 0.0, 0.0]), 2.0, 3.0, 0.25) == pytest.approx(2.0 + 3.0 + 0.25)
+
+
+@pytest.mark.parametrize("kind", [kernels.SHOT_WEIGHTED, kernels.SHOT_SHORTEST])
+def test_compiled_shots_land_the_rolled_sphere_on_the_goal(kind: int) -> None:
+    grid = OccupancyGrid.from_occupied(np.zeros((300, 300), bool), 0.05)
+    planner = HybridAStar(grid, ROBOT)
+    rng = np.random.default_rng(kind)
+    r, roll_max = ROBOT.radius_m, ROBOT.max_roll_rad
+    landed = 0
+    for _ in range(60):
+        start = (7.5, 7.5, float(rng.uniform(-3, 3)), float(rng.choice(planner.rolls)))
+        goal = (7.5 + float(rng.uniform(-4, 4)), 7.5 + float(rng.uniform(-4, 4)), float(rng.uniform(-3, 3)))
+        p = planner._params(goal, True)
+        sr, sc, sl = (np.zeros(kernels.MAX_SHOT_SEGS) for _ in range(3))
+        n = kernels.try_shot(planner.clearance.clearance, planner.clearance.blocked, p, planner.footprint.offsets_x,
+                             planner.footprint.offsets_y, planner._px, planner._py, *start, *goal, 0.0, sr, sc,
+                             sl, 10.0, 0.0, kind)
+        if n == 0:
+            continue
+        landed += 1
+        x, y, yaw, roll = start
+        for k in range(n):
+            assert abs(sr[k]) in (0.0, roll_max) and sc[k] == pytest.approx(np.sign(sr[k]) * ROBOT.max_curvature)
+            x, y, yaw = child_pose(x, y, yaw, roll, sr[k], sc[k], r, sl[k])
+            roll = sr[k]
+        x, y, yaw = child_pose(x, y, yaw, roll, 0.0, 0.0, r, 0.0)
+        assert math.hypot(x - goal[0], y - goal[1]) < 1e-3
+        assert abs(math.remainder(yaw - goal[2], 2 * math.pi)) < 1e-3
+    assert landed >= 55
+
+
+def test_the_centre_cell_shortcut_gives_the_exact_footprint_margin() -> None:
+    """kernels._pose_margin skips the polygon test where the centre's clearance proves a hit; its margins are
+    the clearance module's footprint_margin everywhere, and the shortcut does fire near walls."""
+    grid = load_map("maps/garage.yaml")
+    planner = HybridAStar(grid, ROBOT)
+    p = planner._params((12.0, 23.55, math.pi), True)
+    cm, fp = planner.clearance, planner.footprint
+    rng = np.random.default_rng(2)
+    fired = 0
+    h, w = cm.clearance.shape
+    for _ in range(4000):
+        x = float(rng.uniform(0, w * grid.resolution_m))
+        y = float(rng.uniform(0, h * grid.resolution_m))
+        yaw = float(rng.uniform(-math.pi, math.pi))
+        mine = kernels._pose_margin(cm.clearance, cm.blocked, p, fp.offsets_x, fp.offsets_y, planner._px,
+                                    planner._py, x, y, yaw)
+        exact = footprint_margin(cm.clearance, cm.blocked, cm.origin_x, cm.origin_y, cm.resolution_m, x, y, yaw,
+                                 fp.offsets_x, fp.offsets_y, fp.radius_m, planner._px, planner._py)
+        assert mine == exact
+        ix, iy = math.floor((x - cm.origin_x) / cm.resolution_m), math.floor((y - cm.origin_y) / cm.resolution_m)
+        fired += bool(cm.clearance[iy, ix] < p[kernels.P_REJECT] and exact < 0)
+    assert fired > 100
+
+
+def _corridor() -> OccupancyGrid:
+    occ = np.zeros((30, 300), bool)
+    occ[:3] = occ[-3:] = True  # 1.2 m between the walls: no room to turn round
+    occ[:, :2] = occ[:, -2:] = True
+    return OccupancyGrid.from_occupied(occ, 0.05, name="corridor")
+
+
+def _backwards_m(states: np.ndarray) -> float:
+    ds = np.diff(states[:, 6])
+    return float(ds[states[1:, 4] < 0].sum())
+
+
+def test_a_mostly_backwards_shot_is_held_back_while_the_search_goes_on() -> None:
+    """The goal 8 m straight behind: the shot from the start rolls backwards all the way, so it is held back, not
+    taken; the search's own path (also backwards: there is no room to turn round) comes first."""
+    grid = _corridor()
+    planner = HybridAStar(grid, ROBOT, PlannerOptions(prefer_forward=False))
+    start, goal = (12.0, 0.75, 0.0), (4.0, 0.75, 0.0)
+    run = _Search(planner, start, goal, planner.holonomic(goal[:2], start[:2]), planner.options, True)
+    assert run.step(100_000) == kernels.FOUND
+    assert run.counters[kernels.C_HELD_UNTIL] == 1 + kernels.HOLD_EXPANSIONS  # held at the first expansion
+    assert run.counters[kernels.C_SHOT_SEGS] == 0 and run.expansions < kernels.HOLD_EXPANSIONS
+
+
+def test_the_held_back_shot_is_the_path_when_the_search_runs_out() -> None:
+    grid = _corridor()
+    start, goal = (12.0, 0.75, 0.0), (4.0, 0.75, 0.0)
+    result = HybridAStar(grid, ROBOT, PlannerOptions(prefer_forward=False)).plan(
+        start, goal, Termination(max_iterations=20))
+    assert check_path(grid, ROBOT, result.states, start, goal) == []
+    assert result.analytic_segments > 0 and result.expansions == 20
+    assert _backwards_m(result.states) > 0.95 * result.length_m
+
+
+def test_a_bound_prunes_what_cannot_be_cheaper() -> None:
+    """The forward-only alternative is given the first path's cost as a bound: with a bound below the cheapest
+    forward path the search exhausts without expanding past it; with a bound above it, it finds the path."""
+    grid = OccupancyGrid.from_occupied(np.zeros((120, 200), bool) | _walls(120, 200), 0.05, name="room")
+    planner = HybridAStar(grid, ROBOT, PlannerOptions(allow_reverse=False))
+    start, goal = (3.0, 3.0, 0.0), (7.0, 3.0, math.pi)  # a U-turn: at least the Dubins distance
+    heur = planner.holonomic(goal[:2], start[:2])
+    free = _Search(planner, start, goal, heur, planner.options, False)
+    assert free.step(200_000) == kernels.FOUND
+    cost = planner._search_cost(free)
+    dubins = dubins_distance(*start, *goal, ROBOT.min_turning_radius_m)
+    assert dubins < cost
+    for bound, status in ((0.9 * dubins, kernels.EXHAUSTED), (cost + 1.0, kernels.FOUND)):
+        run = _Search(planner, start, goal, heur, planner.options, False)
+        run.p[kernels.P_BOUND] = bound
+        assert run.step(200_000) == status
+    assert run.expansions <= free.expansions + 1
+
+
+def _walls(h: int, w: int) -> np.ndarray:
+    occ = np.zeros((h, w), bool)
+    occ[:2] = occ[-2:] = True
+    occ[:, :2] = occ[:, -2:] = True
+    return occ
+
+
+def test_a_motion_sweep_finds_every_collision_a_dense_sampling_finds() -> None:
+    """_motion_margin (roll-change sweep, then the arc from where the roll change ends) never calls a motion free
+    that a 2 mm sampling of the exact footprint finds in collision, and reports both outcomes near walls."""
+    grid = load_map("maps/garage.yaml")
+    planner = HybridAStar(grid, ROBOT)
+    p = planner._params((12.0, 23.55, math.pi), True)
+    cm, fp = planner.clearance, planner.footprint
+    r = ROBOT.radius_m
+    rng = np.random.default_rng(5)
+    outcomes = {True: 0, False: 0}
+    near = np.argwhere((cm.clearance > 0.2) & (cm.clearance < 0.5))
+    for _ in range(2500):
+        iy, ix = near[rng.integers(len(near))]
+        x, y = cm.origin_x + (ix + 0.5) * cm.resolution_m, cm.origin_y + (iy + 0.5) * cm.resolution_m
+        yaw = float(rng.uniform(-math.pi, math.pi))
+        if planner.footprint_margin((x, y, yaw)) < 0:  # a motion starts from a free pose
+            continue
+        roll0, roll1 = (float(v) for v in rng.choice(planner.rolls, 2))
+        curv = ROBOT.roll_model.curvature(roll1)
+        s = float(rng.choice([-1.0, 1.0]) * rng.uniform(0.05, 0.6))
+        swept = kernels._motion_margin(cm.clearance, cm.blocked, p, fp.offsets_x, fp.offsets_y, planner._px,
+                                       planner._py, x, y, yaw, roll1 - roll0, curv, s, math.inf)
+        poses = [(*child_pose(x, y, yaw, roll0, roll0 + f * (roll1 - roll0), 0.0, r, 0.0)[:2], yaw)
+                 for f in np.linspace(0.0, 1.0, 80)]
+        poses += [child_pose(x, y, yaw, roll0, roll1, curv, r, t) for t in np.linspace(0.0, s, 300)]
+        dense = cm.footprint_margins(fp, planner.polygon, np.array(poses)).min()
+        if dense < 0:
+            assert swept < 0
+        outcomes[swept >= 0] += 1
+    assert outcomes[True] > 100 and outcomes[False] > 100
+
+
+def test_ranked_words_are_the_next_cheapest_and_end_on_the_goal() -> None:
+    """rs_ranked: rank 0 costs what rs_best's word costs, later ranks cost no less and end on the goal too, and a
+    rank costing more than max_ratio × the cheapest is not offered (the search shoots only near-ties)."""
+    rho = ROBOT.min_turning_radius_m
+    rng = np.random.default_rng(12)
+    t0, l0 = np.zeros(MAX_SEGS, dtype=np.int64), np.zeros(MAX_SEGS)
+    t, seg = np.zeros(MAX_SEGS, dtype=np.int64), np.zeros(MAX_SEGS)
+    refused = 0
+    for _ in range(500):
+        goal = (float(rng.uniform(-4, 4)), float(rng.uniform(-4, 4)), float(rng.uniform(-math.pi, math.pi)))
+        _, best = rs_best(0.0, 0.0, 0.0, *goal, rho, 1.2, 1.0, t0, l0)
+        last = best
+        for rank in range(3):
+            n, cost = rs_ranked(0.0, 0.0, 0.0, *goal, rho, 1.2, 1.0, rank, t, seg)
+            assert n > 0 and cost >= last - 1e-9
+            if rank == 0:
+                assert cost == pytest.approx(best, abs=1e-9)
+            ex, ey, eth = _integrate(t[:n], seg[:n] / rho)
+            assert math.hypot(ex * rho - goal[0], ey * rho - goal[1]) < 1e-6
+            assert abs(math.remainder(eth - goal[2], 2 * math.pi)) < 1e-6
+            last = cost
+        n, cost = rs_ranked(0.0, 0.0, 0.0, *goal, rho, 1.2, 1.0, 2, t, seg, 1.05)
+        if n == 0:
+            refused += 1
+        else:
+            assert cost <= 1.05 * best + 1e-9
+    assert refused > 50
