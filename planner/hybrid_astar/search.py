@@ -86,7 +86,7 @@ class PlannerOptions:
     n_roll_bins: int = 3              # closed-set roll bins (left/upright/right; 0 = one per held roll)
     step_m: float = 0.0               # arc length per expansion; 0 = automatic (see ``resolved_step``)
     allow_reverse: bool | None = None  # None = the robot's own ``reversible`` (true for the spheres)
-    dead_end_check: bool = True       # after GOAL_CHECK_AFTER expansions, prove dead-end goals by a reverse search
+    dead_end_check: bool = True       # search from the goal too (two_ended.py): finds the path or proves a dead end
     n_circles: int = 3                # covering circles of the footprint (paper 001 Fig. 6)
     allow_unknown: bool = False
     goal_tolerance_m: float = 0.1
