@@ -500,7 +500,7 @@ class HybridAStar:
                     expansions=run.expansions)
             if not checked_goal and run.expansions >= GOAL_SIDE_AFTER and goal_side_possible(self):
                 checked_goal = True  # the goal side's search is the dead-end check (5b) as well
-                side = GoalSide(self, start, goal, o)
+                side = GoalSide(self, start, goal, o, _Search)
             if side is not None and side.step(min(self.chunk_expansions(o), cap - side.expansions)):
                 if side.motions is not None:
                     return side

@@ -25,7 +25,8 @@ rolled from the true start and checked with the exact footprint before it is ret
 from __future__ import annotations
 
 import math
-from typing import TYPE_CHECKING
+from collections.abc import Callable
+from typing import Any
 
 import numpy as np
 
@@ -33,9 +34,9 @@ from planner.hybrid_astar import kernels
 from planner.hybrid_astar.reeds_shepp import MAX_SHOT_M
 from planner.kinematics import wrap
 
-if TYPE_CHECKING:
-    from planner.hybrid_astar.search import HybridAStar, PlannerOptions, Pose, _Search
-
+# (search.py's HybridAStar, _Search and PlannerOptions are typed Any here: this module may not import search.py,
+# which imports it)
+Pose = tuple[float, float, float]
 Motion = tuple[float, float, float]
 
 GAP_NODES = 12  # nodes back along a tolerance-hit path from which a shot to the exact start is tried
@@ -61,7 +62,7 @@ def centrally_symmetric(x: np.ndarray, y: np.ndarray, tol: float = 1e-9) -> bool
     return bool(d.min(axis=1).max() <= tol * max(1.0, float(np.abs(pts).max())))
 
 
-def goal_side_possible(planner: HybridAStar) -> bool:
+def goal_side_possible(planner: Any) -> bool:
     """The reverse problem with the heading turned by π is the same problem: the footprint polygon and its
     covering circles are centrally symmetric."""
     fp = planner.footprint
@@ -70,11 +71,12 @@ def goal_side_possible(planner: HybridAStar) -> bool:
 
 class GoalSide:
     """The reverse problem's search, stepped a chunk at a time; :attr:`motions` is the path it found (from the
-    start to the goal), :attr:`exhausted` says it ran out of states (the goal pose is a dead end)."""
+    start to the goal), :attr:`exhausted` says it ran out of states (the goal pose is a dead end).
 
-    def __init__(self, planner: HybridAStar, start: Pose, goal: Pose, o: PlannerOptions) -> None:
-        from planner.hybrid_astar.search import _Search
+    ``new_search(planner, start, goal, heuristic, options, reverse)`` makes the search (search.py's ``_Search``).
+    """
 
+    def __init__(self, planner: Any, start: Pose, goal: Pose, o: Any, new_search: Callable[..., Any]) -> None:
         self.planner = planner
         self.o = o
         self.start = start
@@ -82,7 +84,7 @@ class GoalSide:
         self.back_start = (goal[0], goal[1], wrap(goal[2] + math.pi))
         self.back_goal = (start[0], start[1], wrap(start[2] + math.pi))
         heur = planner.holonomic(self.back_goal[:2], self.back_start[:2])
-        self.run: _Search = _Search(planner, self.back_start, self.back_goal, heur, o, planner.reverse)
+        self.run = new_search(planner, self.back_start, self.back_goal, heur, o, planner.reverse)
         self.motions: list[Motion] | None = None
         self.exhausted = False
         self.closed_gaps = 0

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from planner.errors import NoValidPathFound
-from planner.hybrid_astar.search import HybridAStar, PlannerOptions
+from planner.hybrid_astar.search import HybridAStar, PlannerOptions, _Search
 from planner.hybrid_astar.two_ended import GoalSide, centrally_symmetric, goal_side_motions, goal_side_possible
 from planner.kinematics import child_pose, wrap
 from planner.maps.nav2 import load_map
@@ -83,7 +83,7 @@ def test_a_problem_only_the_goal_side_solves_within_a_small_cap():
 def test_the_goal_side_path_rolled_from_the_true_start_ends_at_the_goal_and_is_free():
     grid, start, goal = _trap_problem()
     planner = HybridAStar(grid, ROBOT)
-    side = GoalSide(planner, start, goal, planner.options)
+    side = GoalSide(planner, start, goal, planner.options, _Search)
     for _ in range(20):
         if side.step(2000):
             break
