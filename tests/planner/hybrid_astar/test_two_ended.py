@@ -96,6 +96,22 @@ def test_the_goal_side_path_rolled_from_the_true_start_ends_at_the_goal_and_is_f
     assert not any(footprint_hits(grid, ROBOT, *p) for p in fine[::4, :3])
 
 
+def test_a_goal_side_path_that_ends_within_tolerance_of_the_start_is_closed_onto_the_exact_start():
+    # bays#6 of the real-map bench (seed 21): the search from the goal ends on a tolerance hit near the start
+    grid = load_map("maps/real/bays.yaml")
+    start, goal = (16.125, 5.875, -0.925008240078236), (13.575, 1.575, -2.9528947360799718)
+    planner = HybridAStar(grid, ROBOT)
+    side = GoalSide(planner, start, goal, planner.options, _Search)
+    while side.expansions < 60_000 and not side.step(2000):
+        pass
+    assert side.motions is not None and side.closed_gaps >= 1
+    # rolled from the true start, it ends at the goal up to the shot's landing error, far inside the tolerance
+    x, y, yaw, roll = _roll_out(start, side.motions, ROBOT.radius_m)
+    assert math.hypot(x - goal[0], y - goal[1]) < 0.01 and abs(wrap(yaw - goal[2])) < 1e-3 and roll == 0.0
+    states = planner._densify(start, side.motions, 0.04)
+    assert not any(footprint_hits(grid, ROBOT, *p) for p in states[:, :3])
+
+
 def test_footprint_symmetry_decides_whether_the_goal_side_runs():
     assert centrally_symmetric(np.array([1.0, -1.0, 0.0, 0.0]), np.array([0.0, 0.0, 2.0, -2.0]))
     assert not centrally_symmetric(np.array([1.0, -0.5, -0.5]), np.array([0.0, 0.5, -0.5]))
