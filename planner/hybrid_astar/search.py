@@ -509,7 +509,7 @@ class HybridAStar:
                     f"reached from only {side.expansions} states around it, none of them the start's (a dead end "
                     f"or a heading into an obstacle)", planning_time_s=time.perf_counter() - t0,
                     expansions=run.expansions + side.expansions)
-            if not checked_goal and run.expansions >= GOAL_CHECK_AFTER:
+            if not checked_goal and run.expansions >= GOAL_CHECK_AFTER and (self.reverse or goal_side_possible(self)):
                 # 5b. Fail fast: a bounded search of the reverse problem (from the goal, every motion run
                 # backwards) that exhausts proves the goal pose cannot be approached at all.
                 checked_goal = True
