@@ -52,6 +52,7 @@ from planner.errors import (
 from planner.hybrid_astar import kernels
 from planner.hybrid_astar.dubins import dubins_distance
 from planner.hybrid_astar.heuristics import HolonomicHeuristic, auto_downsample, coarse_cost_grid, reeds_shepp_table
+from planner.hybrid_astar.two_ended import GoalSide, goal_side_possible
 from planner.kinematics import child_pose, densify_motions, wrap
 from planner.maps.clearance import CircleFootprint, ClearanceMap, inscribed_radius
 from planner.maps.reachability import refuse_unreachable
@@ -70,6 +71,7 @@ HEURISTIC_CACHE_SIZE = 8  # holonomic tables kept per planner (one per goal cell
 GOAL_CHECK_AFTER = 20_000  # expansions without a path before the goal's surroundings are searched (fail fast)
 GOAL_CHECK_BUDGET = 40_000  # expansions that search may take
 GOAL_CHECK_SHARE = 0.15  # ... and at most this share of the time limit
+GOAL_SIDE_AFTER = 2_000  # expansions without a path before the goal side's search joins in (two_ended.py)
 FORWARD_RETRY_MIN = 20_000  # expansions a forward-only search may always take to find a cheaper path
 FORWARD_RETRY_SHARE = 0.5  # ... tried when the path found rolls more than this share of its length backwards
 CLOSED_SET_BUDGET_MB = 1024  # the closed-set bitset of one plan may not exceed this (≈ 6300² cells at defaults, tested)
@@ -85,7 +87,7 @@ class PlannerOptions:
     n_roll_bins: int = 3              # closed-set roll bins (left/upright/right; 0 = one per held roll)
     step_m: float = 0.0               # arc length per expansion; 0 = automatic (see ``resolved_step``)
     allow_reverse: bool | None = None  # None = the robot's own ``reversible`` (true for the spheres)
-    dead_end_check: bool = True       # after GOAL_CHECK_AFTER expansions, prove dead-end goals by a reverse search
+    dead_end_check: bool = True       # search from the goal too (two_ended.py): finds the path or proves a dead end
     n_circles: int = 3                # covering circles of the footprint (paper 001 Fig. 6)
     allow_unknown: bool = False
     goal_tolerance_m: float = 0.1
@@ -428,19 +430,24 @@ class HybridAStar:
                 planning_time_s=time.perf_counter() - t0,
             )
         run = _Search(self, start, goal, heur, o, self.reverse)
-        self._drive(run, start, goal, o, clock)
-        motions = self._motions(run)
+        side = self._drive(run, start, goal, o, clock)
+        goal_path = None if side is None else side.motions
+        found = run if goal_path is None or side is None else side.run  # the search that found the path
+        motions = self._motions(run) if goal_path is None else list(goal_path)
         raw_length = self._length(start, motions)
         t_search = time.perf_counter() - t0
         motions = self._smooth(start, motions, run.p, o)
         t_smooth = time.perf_counter() - t0 - t_search
         extra: dict[str, Any] = {"unsmoothed_length_m": raw_length, "search_time_s": t_search,
-                                 "smoothing_time_s": t_smooth}
-        analytic = int(run.counters[kernels.C_SHOT_SEGS])
+                                 "smoothing_time_s": t_smooth, "found_from": "start" if found is run else "goal"}
+        analytic = int(found.counters[kernels.C_SHOT_SEGS])
         expansions = run.expansions
+        if side is not None:
+            expansions += side.expansions
+            extra["goal_side_expansions"] = side.expansions
         if self.reverse and o.prefer_forward:
-            fwd, forward = self._forward_alternative(start, goal, heur, o, clock, motions, run.expansions,
-                                                     self._search_cost(run))
+            fwd, forward = self._forward_alternative(start, goal, heur, o, clock, motions, found.expansions,
+                                                     self._search_cost(found))
             if fwd is not None:
                 expansions += fwd.expansions
                 extra["forward_alternative_expansions"] = fwd.expansions
@@ -474,21 +481,37 @@ class HybridAStar:
         )
 
     def _drive(self, run: _Search, start: Pose, goal: Pose, o: PlannerOptions, clock: Clock,
-               fail_fast: bool = True, cap: int | None = None) -> None:
-        """Run the search in compiled chunks until it finds the goal; raise the planning error otherwise."""
+               fail_fast: bool = True, cap: int | None = None) -> GoalSide | None:
+        """Run the search in compiled chunks until it finds the goal; raise the planning error otherwise.
+
+        With ``fail_fast`` and a centrally symmetric footprint, the goal side's search (:mod:`two_ended`) joins in
+        after GOAL_SIDE_AFTER expansions, a chunk after each of this search's; it is returned when it ran (its
+        ``motions`` set when it found the path first)."""
         checked_goal = not (fail_fast and o.dead_end_check)
+        side: GoalSide | None = None
         t0 = clock.t0
         cap = clock.termination.max_iterations if cap is None else min(cap, clock.termination.max_iterations)
         while True:
             status = run.step(min(self.chunk_expansions(o), cap - run.expansions))
             if status == kernels.FOUND:
-                return
+                return side
             if status == kernels.EXHAUSTED:
                 raise NoValidPathFound(
                     f"no valid path: the search exhausted every state reachable from the start "
                     f"({run.expansions} expansions)", planning_time_s=time.perf_counter() - t0,
                     expansions=run.expansions)
-            if not checked_goal and run.expansions >= GOAL_CHECK_AFTER:
+            if not checked_goal and run.expansions >= GOAL_SIDE_AFTER and goal_side_possible(self):
+                checked_goal = True  # the goal side's search is the dead-end check (5b) as well
+                side = GoalSide(self, start, goal, o, _Search)
+            if side is not None and side.step(min(self.chunk_expansions(o), cap - side.expansions)):
+                if side.motions is not None:
+                    return side
+                raise NoValidPathFound(
+                    f"no valid path: the goal pose ({goal[0]:.2f}, {goal[1]:.2f}, yaw {goal[2]:.2f}) can be "
+                    f"reached from only {side.expansions} states around it, none of them the start's (a dead end "
+                    f"or a heading into an obstacle)", planning_time_s=time.perf_counter() - t0,
+                    expansions=run.expansions + side.expansions)
+            if not checked_goal and run.expansions >= GOAL_CHECK_AFTER and (self.reverse or goal_side_possible(self)):
                 # 5b. Fail fast: a bounded search of the reverse problem (from the goal, every motion run
                 # backwards) that exhausts proves the goal pose cannot be approached at all.
                 checked_goal = True
@@ -502,7 +525,7 @@ class HybridAStar:
             if (run.expansions >= cap or clock.expired()) and run.counters[kernels.C_HELD_SEGS] > 0:
                 # out of time or expansions with a mostly-backwards shot held back: it is the path
                 kernels.take_held(run.counters, run.seg_roll, run.seg_curv, run.seg_len)
-                return
+                return side
             if run.expansions >= cap:
                 raise NoValidPathFound(f"no valid path within the iteration cap of {cap} expansions",
                                        planning_time_s=time.perf_counter() - t0, expansions=run.expansions)

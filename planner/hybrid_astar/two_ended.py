@@ -1,0 +1,153 @@
+"""The goal side of a two-ended search: the reverse problem searched alongside the forward one.
+
+Some problems trap the forward search at the start (a pocket whose way out the holonomic heuristic does not
+see) while the same search started from the goal finds a path in a few thousand expansions. :class:`GoalSide`
+runs the reverse problem (from the goal to the start, every motion run backwards) in chunks interleaved with
+the forward search's (:meth:`HybridAStar._drive`); whichever finds a path first wins, and when the reverse
+problem runs out of states that is the proof that the goal pose is a dead end.
+
+The reverse problem is posed with the heading turned by π. Eq. 1 is unchanged under
+(yaw, φ, κ, s) → (yaw + π, −φ, −κ, −s), and a motion (shift to the held roll φ, then an arc of curvature κ and
+signed length s) run backwards in time is the arc (κ, −s) followed by the shift back. So a path of motions
+m_1 … m_N (held roll φ_i, curvature κ_i, length s_i) from (goal, yaw + π) to (start, yaw + π), upright at both
+ends, is rolled from the start to the goal by (−φ_N, −κ_N, s_N), …, (−φ_1, −κ_1, s_1) and a last return to
+upright (:func:`goal_side_motions`): it rolls forwards where the reverse-problem path rolled forwards, so the
+search's forward preference (reverse multiplier, held-back mostly-backwards shots) carries over unchanged.
+The footprint turns with the heading: the reverse problem is only the same problem for a footprint that is
+centrally symmetric (:func:`centrally_symmetric`); for any other the goal side is not searched.
+
+A path found from the goal starts within the goal tolerance of the start only, unless its last motions are an
+analytic shot (which lands within 0.1 mm). A path that ends on a tolerance hit is closed with a shot to the
+exact start from its end or one of its last nodes, else dropped (the search goes on). The converted path is
+rolled from the true start and checked with the exact footprint before it is returned.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+
+from planner.hybrid_astar import kernels
+from planner.hybrid_astar.reeds_shepp import MAX_SHOT_M
+from planner.kinematics import wrap
+
+# (search.py's HybridAStar, _Search and PlannerOptions are typed Any here: this module may not import search.py,
+# which imports it)
+Pose = tuple[float, float, float]
+Motion = tuple[float, float, float]
+
+GAP_NODES = 12  # nodes back along a tolerance-hit path from which a shot to the exact start is tried
+
+
+def goal_side_motions(motions: list[Motion]) -> list[Motion]:
+    """Motions of a reverse-problem path (from the goal with the heading turned by π, starting upright) as the
+    path that rolls from the start to the goal: order reversed, held roll and curvature negated, signed
+    length kept; ends upright."""
+    out = [(-h + 0.0, -c + 0.0, s) for h, c, s in reversed(motions)]
+    while out and out[0][0] == 0.0 and out[0][2] == 0.0:  # returns to upright at its end: nothing to do at ours
+        out.pop(0)
+    out.append((0.0, 0.0, 0.0))
+    return out
+
+
+def centrally_symmetric(x: np.ndarray, y: np.ndarray, tol: float = 1e-9) -> bool:
+    """True when the points (x, y) are the same set turned by π about the origin."""
+    pts = np.column_stack([x, y])
+    if len(pts) == 0:
+        return True
+    d = np.hypot(pts[:, None, 0] + pts[None, :, 0], pts[:, None, 1] + pts[None, :, 1])
+    return bool(d.min(axis=1).max() <= tol * max(1.0, float(np.abs(pts).max())))
+
+
+def goal_side_possible(planner: Any) -> bool:
+    """The reverse problem with the heading turned by π is the same problem: the footprint polygon and its
+    covering circles are centrally symmetric."""
+    fp = planner.footprint
+    return centrally_symmetric(planner._px, planner._py) and centrally_symmetric(fp.offsets_x, fp.offsets_y)
+
+
+class GoalSide:
+    """The reverse problem's search, stepped a chunk at a time; :attr:`motions` is the path it found (from the
+    start to the goal), :attr:`exhausted` says it ran out of states (the goal pose is a dead end).
+
+    ``new_search(planner, start, goal, heuristic, options, reverse)`` makes the search (search.py's ``_Search``).
+    """
+
+    def __init__(self, planner: Any, start: Pose, goal: Pose, o: Any, new_search: Callable[..., Any]) -> None:
+        self.planner = planner
+        self.o = o
+        self.start = start
+        self.goal = goal
+        self.back_start = (goal[0], goal[1], wrap(goal[2] + math.pi))
+        self.back_goal = (start[0], start[1], wrap(start[2] + math.pi))
+        heur = planner.holonomic(self.back_goal[:2], self.back_start[:2])
+        self.run = new_search(planner, self.back_start, self.back_goal, heur, o, planner.reverse)
+        self.motions: list[Motion] | None = None
+        self.exhausted = False
+        self.closed_gaps = 0
+        self.dropped = 0
+
+    @property
+    def expansions(self) -> int:
+        return self.run.expansions
+
+    @property
+    def analytic(self) -> int:
+        return int(self.run.counters[kernels.C_SHOT_SEGS])
+
+    def step(self, budget: int) -> bool:
+        """Up to ``budget`` expansions; True when a path was found (:attr:`motions`) or the search exhausted."""
+        if budget <= 0 or self.exhausted or self.motions is not None:
+            return self.exhausted or self.motions is not None
+        status = self.run.step(budget)
+        if status == kernels.EXHAUSTED:
+            self.exhausted = True
+            return True
+        if status == kernels.FOUND:
+            if self.run.counters[kernels.C_SHOT_SEGS] == 0 and not self._close_gap():
+                self.dropped += 1
+                return False
+            motions = goal_side_motions(self.planner._motions(self.run))
+            if self._valid(motions):
+                self.motions = motions
+                return True
+            self.dropped += 1
+        return False
+
+    def _close_gap(self) -> bool:
+        """The search ended within the goal tolerance of the start: shoot to the exact start from the node it
+        ended on or one of the GAP_NODES before it; True (and the result replaced) when a shot is free."""
+        run, pl = self.run, self.planner
+        kinds = ((kernels.SHOT_WEIGHTED, kernels.SHOT_SHORTEST) if run.p[kernels.P_ALLOW_REVERSE] > 0.5
+                 else (kernels.SHOT_DUBINS,))
+        gx, gy, gyaw = self.back_goal
+        k = int(run.counters[kernels.C_RESULT])
+        for _ in range(GAP_NODES):
+            x, y, yaw, roll = (float(v) for v in run.node_f[k, :4])
+            for kind in kinds:
+                n = kernels.try_shot(pl.clearance.clearance, pl.clearance.blocked, run.p, pl.footprint.offsets_x,
+                                     pl.footprint.offsets_y, pl._px, pl._py, x, y, yaw, roll, gx, gy, gyaw, 0.0,
+                                     run.seg_roll, run.seg_curv, run.seg_len, MAX_SHOT_M, 0.0, kind)
+                if n > 0:
+                    run.counters[kernels.C_RESULT] = k
+                    run.counters[kernels.C_SHOT_SEGS] = n
+                    self.closed_gaps += 1
+                    return True
+            k = int(run.node_i[k, 0])
+            if k < 0:
+                break
+        return False
+
+    def _valid(self, motions: list[Motion]) -> bool:
+        """Rolled from the true start the path ends within the goal tolerance and its footprint is free at a
+        quarter-cell spacing (the same exact check as the final one in :meth:`HybridAStar.plan`)."""
+        pl, o = self.planner, self.o
+        end = pl._knots(self.start, motions)[-1]
+        if (math.hypot(end[0] - self.goal[0], end[1] - self.goal[1]) > o.goal_tolerance_m
+                or abs(wrap(float(end[2]) - self.goal[2])) > o.goal_tolerance_yaw_rad):
+            return False
+        fine = pl._densify(self.start, motions, pl.grid.resolution_m / 4)
+        return bool(pl.clearance.footprint_margins(pl.footprint, pl.polygon, fine[:, :3]).min() >= 0)
