@@ -230,6 +230,19 @@ def _local(x0: float, y0: float, yaw0: float, x1: float, y1: float, yaw1: float,
 
 
 @njit(cache=True)
+def _write_word(turns: np.ndarray, lens: np.ndarray, rho: float, seg_turn: np.ndarray, seg_len: np.ndarray) -> int:
+    """Write one word's non-empty segments (turn +1/0/−1, signed length in units of ``rho``) into ``seg_turn``
+    and ``seg_len`` (metres); returns how many."""
+    m = 0
+    for s in range(MAX_SEGS):
+        if turns[s] != 2 and abs(lens[s]) > 1e-12:
+            seg_turn[m] = turns[s]
+            seg_len[m] = lens[s] * rho
+            m += 1
+    return m
+
+
+@njit(cache=True)
 def rs_ranked(x0: float, y0: float, yaw0: float, x1: float, y1: float, yaw1: float, rho: float,
               reverse_penalty: float, switch_cost: float, rank: int, seg_turn: np.ndarray, seg_len: np.ndarray,
               max_ratio: float = math.inf) -> tuple[int, float]:
@@ -256,13 +269,7 @@ def rs_ranked(x0: float, y0: float, yaw0: float, x1: float, y1: float, yaw1: flo
     best_k = order[rank]
     if costs[best_k] > max_ratio * costs[order[0]]:
         return 0, math.inf
-    m = 0
-    for s in range(MAX_SEGS):
-        if turns[best_k, s] != 2 and abs(lens[best_k, s]) > 1e-12:
-            seg_turn[m] = turns[best_k, s]
-            seg_len[m] = lens[best_k, s] * rho
-            m += 1
-    return m, costs[best_k]
+    return _write_word(turns[best_k], lens[best_k], rho, seg_turn, seg_len), costs[best_k]
 
 
 @njit(cache=True)
@@ -295,13 +302,7 @@ def rs_best(x0: float, y0: float, yaw0: float, x1: float, y1: float, yaw1: float
         return m, rho * (t + p + q)
     if best_k < 0:
         return 0, math.inf
-    m = 0
-    for s in range(MAX_SEGS):
-        if turns[best_k, s] != 2 and abs(lens[best_k, s]) > 1e-12:
-            seg_turn[m] = turns[best_k, s]
-            seg_len[m] = lens[best_k, s] * rho
-            m += 1
-    return m, best
+    return _write_word(turns[best_k], lens[best_k], rho, seg_turn, seg_len), best
 
 
 
