@@ -310,6 +310,8 @@ class HybridAStar:
         # is at most |p − b| − res/2 ≤ d + res·(1/√2 − 1/2) from p; the stored clearance is d − √2·res. So
         # a free pose needs stored clearance ≥ r_in − (√2 + 1/√2 − 1/2)·res (admissible for the heuristic).
         self.centre_threshold_m = inscribed_radius(self.polygon) - 1.63 * grid.resolution_m
+        # the reverse problem with the heading turned by π is this problem (two_ended.py): decided once per planner
+        self.goal_side_ok = goal_side_possible(self)
         o = self.options
         self.reverse = robot.reversible if o.allow_reverse is None else o.allow_reverse
         self.rs_table = (reeds_shepp_table(robot.min_turning_radius_m, o.n_yaw_bins, RS_CELL_M) if self.reverse
@@ -500,7 +502,7 @@ class HybridAStar:
                     f"no valid path: the search exhausted every state reachable from the start "
                     f"({run.expansions} expansions)", planning_time_s=time.perf_counter() - t0,
                     expansions=run.expansions)
-            if not checked_goal and run.expansions >= GOAL_SIDE_AFTER and goal_side_possible(self):
+            if not checked_goal and run.expansions >= GOAL_SIDE_AFTER and self.goal_side_ok:
                 checked_goal = True  # the goal side's search is the dead-end check (5b) as well
                 side = GoalSide(self, start, goal, o, _Search)
             if side is not None and side.step(min(self.chunk_expansions(o), cap - side.expansions)):
@@ -511,7 +513,7 @@ class HybridAStar:
                     f"reached from only {side.expansions} states around it, none of them the start's (a dead end "
                     f"or a heading into an obstacle)", planning_time_s=time.perf_counter() - t0,
                     expansions=run.expansions + side.expansions)
-            if not checked_goal and run.expansions >= GOAL_CHECK_AFTER and (self.reverse or goal_side_possible(self)):
+            if not checked_goal and run.expansions >= GOAL_CHECK_AFTER and (self.reverse or self.goal_side_ok):
                 # 5b. Fail fast: a bounded search of the reverse problem (from the goal, every motion run
                 # backwards) that exhausts proves the goal pose cannot be approached at all.
                 checked_goal = True

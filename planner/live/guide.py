@@ -11,7 +11,7 @@ it before it will consider the detour: in ``maze-top-left-boxes`` 2 million expa
 where the same search finds the 26 m detour in 50 000 expansions once the gap is closed.
 
 The *guide* is the same coarse cost grid with the passability threshold raised from the inscribed radius to
-the footprint's lateral half-width (less the same discretisation slack, ``CENTRE_SLACK_CELLS``): a cell is
+the footprint's lateral half-width (less the planner's own discretisation slack): a cell is
 open only if a robot passing through it along its heading could fit. It is not admissible everywhere (a robot
 may stand closer to a wall than its half-width while facing it), so the cells around the start and the goal
 keep the ordinary multipliers, a guided search that fails proves nothing, and the session falls back to the
@@ -36,11 +36,9 @@ import numpy as np
 
 from planner.hybrid_astar.heuristics import coarse_cost_grid
 from planner.hybrid_astar.search import HybridAStar, Pose
+from planner.maps.clearance import inscribed_radius
 from planner.result import PlanResult
 from planner.termination import Termination
-
-CENTRE_SLACK_CELLS = 1.63
-"""The discretisation slack of the planner's own centre threshold (inscribed radius − 1.63 cells), reused."""
 
 WIDE_M = 0.15
 """How much wider than the footprint the second guide's gaps must be (m)."""
@@ -57,8 +55,9 @@ def lateral_half_width_m(polygon: np.ndarray) -> float:
 def guide_threshold_m(planner: HybridAStar, widen_m: float = 0.0) -> float:
     """The guide's passability threshold on the stored clearance (m), ``widen_m`` above the lateral half-width
     less the slack; never below the planner's own."""
-    return max(planner.centre_threshold_m, lateral_half_width_m(planner.polygon) + widen_m
-               - CENTRE_SLACK_CELLS * planner.grid.resolution_m)
+    # the planner's threshold is the inscribed radius less its slack: the same slack below the half-width
+    slack = inscribed_radius(planner.polygon) - planner.centre_threshold_m
+    return max(planner.centre_threshold_m, lateral_half_width_m(planner.polygon) + widen_m - slack)
 
 
 def _coarse(planner: HybridAStar, fine: np.ndarray, widen_m: float) -> np.ndarray:
