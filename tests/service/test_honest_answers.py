@@ -240,6 +240,37 @@ def test_one_time_limit_one_answer_at_every_door(client: httpx.Client, server: S
     assert code == 4 and json.loads(out)["error_code"] == 207 and err.count("timeout:") == 1
 
 
+def test_one_unreachable_goal_one_refusal_at_every_door(client: httpx.Client, server: Server, tmp_path: Path,
+                                                        capsys: pytest.CaptureFixture[str]) -> None:
+    """The hall with its goal walled in: the reachability refusal (planner/maps/reachability.py) gives exit 3 on
+    the CLI, 422 with 208 over HTTP and an error reply with 208 over Zenoh, with the same message, 0 expansions."""
+    from planner.maps.nav2 import save_map
+    from planner.occupancy import OccupancyGrid
+
+    occupied = harness.hall_grid().data >= 50
+    occupied[12:30, 70:73] = occupied[12:30, 88:91] = True  # a closed box round the goal (8, 2)
+    occupied[12:15, 70:91] = occupied[27:30, 70:91] = True
+    sealed = OccupancyGrid.from_occupied(occupied, 0.1, name="sealed")
+    save_map(sealed, tmp_path / "sealed.yaml")
+    inline = {"data": np.where(occupied, 100, 0).tolist(), "resolution_m": 0.1, "name": "sealed"}
+    body = harness.plan_body()
+    body["map"] = inline
+    response = client.post("/v1/plan", json=body)
+    assert response.status_code == 422, response.text
+    http = response.json()
+    reply = zenoh_reply(server, "sphereplan/plan", body)
+    assert reply["ok"] is False
+    code, out, _ = run(capsys, "plan", "--map", str(tmp_path / "sealed.yaml"), "--start",
+                       *map(str, harness.HALL_START), "--goal", *map(str, harness.HALL_GOAL))
+    assert code == 3
+    cli = json.loads(out)
+    answers = [http, reply["payload"], cli]
+    assert [a["error_code"] for a in answers] == [208, 208, 208]
+    assert "inscribed in its footprint" in http["error_msg"]
+    assert {a["error_msg"] for a in answers} == {http["error_msg"]}
+    assert [a.get("expansions") for a in answers] == [0, 0, 0]
+
+
 # ------------------------------------------------------------------------------------ 4. resolution, encodings
 
 
