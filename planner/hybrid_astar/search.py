@@ -49,7 +49,7 @@ from planner.errors import (
     StartOccupied,
     StartOutsideMap,
 )
-from planner.hybrid_astar import kernels
+from planner.hybrid_astar import kernels, meet
 from planner.hybrid_astar.dubins import dubins_distance
 from planner.hybrid_astar.heuristics import HolonomicHeuristic, auto_downsample, coarse_cost_grid, reeds_shepp_table
 from planner.hybrid_astar.two_ended import GoalSide, goal_side_possible
@@ -72,6 +72,7 @@ GOAL_CHECK_AFTER = 20_000  # expansions without a path before the goal's surroun
 GOAL_CHECK_BUDGET = 40_000  # expansions that search may take
 GOAL_CHECK_SHARE = 0.15  # ... and at most this share of the time limit
 GOAL_SIDE_AFTER = 2_000  # expansions without a path before the goal side's search joins in (two_ended.py)
+MEET_AFTER = 10_000  # expansions of both sides before shots try to join their trees (meet.py): tails only
 FORWARD_RETRY_MIN = 20_000  # expansions a forward-only search may always take to find a cheaper path
 FORWARD_RETRY_SHARE = 0.5  # ... tried when the path found rolls more than this share of its length backwards
 CLOSED_SET_BUDGET_MB = 1024  # the closed-set bitset of one plan may not exceed this (≈ 6300² cells at defaults, tested)
@@ -193,6 +194,7 @@ def warm_up() -> float:
     for reverse in (False, True):
         HybridAStar(grid, robot, PlannerOptions(allow_reverse=reverse)).plan(
             (1.5, 1.5, 0.0), (6.5, 6.5, math.pi / 2))
+    meet.warm_up()
     took = time.perf_counter() - t0
     log.info("compiled the search kernels in %.2f s (once per process)", took)
     return took
@@ -434,6 +436,7 @@ class HybridAStar:
         run = _Search(self, start, goal, heur, o, self.reverse)
         side = self._drive(run, start, goal, o, clock)
         goal_path = None if side is None else side.motions
+        met = side is not None and side.met_segments > 0  # a shot joined the two searches' trees (meet.py)
         found = run if goal_path is None or side is None else side.run  # the search that found the path
         motions = self._motions(run) if goal_path is None else list(goal_path)
         raw_length = self._length(start, motions)
@@ -441,15 +444,16 @@ class HybridAStar:
         motions = self._smooth(start, motions, run.p, o)
         t_smooth = time.perf_counter() - t0 - t_search
         extra: dict[str, Any] = {"unsmoothed_length_m": raw_length, "search_time_s": t_search,
-                                 "smoothing_time_s": t_smooth, "found_from": "start" if found is run else "goal"}
-        analytic = int(found.counters[kernels.C_SHOT_SEGS])
+                                 "smoothing_time_s": t_smooth,
+                                 "found_from": "both" if met else "start" if found is run else "goal"}
+        analytic = side.met_segments if met and side is not None else int(found.counters[kernels.C_SHOT_SEGS])
         expansions = run.expansions
         if side is not None:
             expansions += side.expansions
             extra["goal_side_expansions"] = side.expansions
         if self.reverse and o.prefer_forward:
-            fwd, forward = self._forward_alternative(start, goal, heur, o, clock, motions, found.expansions,
-                                                     self._search_cost(found))
+            bound = side.met_cost if met and side is not None else self._search_cost(found)
+            fwd, forward = self._forward_alternative(start, goal, heur, o, clock, motions, found.expansions, bound)
             if fwd is not None:
                 expansions += fwd.expansions
                 extra["forward_alternative_expansions"] = fwd.expansions
@@ -505,7 +509,8 @@ class HybridAStar:
             if not checked_goal and run.expansions >= GOAL_SIDE_AFTER and self.goal_side_ok:
                 checked_goal = True  # the goal side's search is the dead-end check (5b) as well
                 side = GoalSide(self, start, goal, o, _Search)
-            if side is not None and side.step(min(self.chunk_expansions(o), cap - side.expansions)):
+            if side is not None and (side.step(min(self.chunk_expansions(o), cap - side.expansions))
+                                     or (run.expansions + side.expansions >= MEET_AFTER and side.meet(run))):
                 if side.motions is not None:
                     return side
                 raise NoValidPathFound(
@@ -711,21 +716,24 @@ class HybridAStar:
 
     def _motions(self, run: _Search) -> list[tuple[float, float, float]]:
         """The path as a list of (held roll, curvature, signed arc length) motions, ending upright."""
-        node_f, node_i, result = run.node_f, run.node_i, int(run.counters[kernels.C_RESULT])
         seg_roll, seg_curv, seg_len = run.seg_roll, run.seg_curv, run.seg_len
         n_shot = int(run.counters[kernels.C_SHOT_SEGS])
+        motions = self._chain(run, int(run.counters[kernels.C_RESULT]))
+        motions += [(float(seg_roll[i]), float(seg_curv[i]), float(seg_len[i])) for i in range(n_shot)]
+        motions.append((0.0, 0.0, 0.0))
+        return motions
+
+    def _chain(self, run: _Search, k: int) -> list[tuple[float, float, float]]:
+        """The motions from the search's first node to its node ``k`` (held roll, curvature, signed length)."""
+        node_f, node_i = run.node_f, run.node_i
         chain = []
-        k = result
         while node_i[k, 0] >= 0:
             chain.append(k)
             k = int(node_i[k, 0])
         chain.reverse()
         step = self.resolved_step_m
-        motions = [(float(node_f[k, 3]), float(self.curvatures[node_i[k, 1]]), float(node_i[k, 2]) * step)
-                   for k in chain]
-        motions += [(float(seg_roll[i]), float(seg_curv[i]), float(seg_len[i])) for i in range(n_shot)]
-        motions.append((0.0, 0.0, 0.0))
-        return motions
+        return [(float(node_f[k, 3]), float(self.curvatures[node_i[k, 1]]), float(node_i[k, 2]) * step)
+                for k in chain]
 
     def _densify(self, start: Pose, motions: list[tuple[float, float, float]], spacing: float) -> np.ndarray:
         """Dense poses (x, y, yaw, roll, direction) along the motions, ≤ ``spacing`` apart."""

@@ -31,6 +31,7 @@ from typing import Any
 import numpy as np
 
 from planner.hybrid_astar import kernels
+from planner.hybrid_astar.meet import Meeting
 from planner.hybrid_astar.reeds_shepp import MAX_SHOT_M
 from planner.kinematics import wrap
 
@@ -89,6 +90,10 @@ class GoalSide:
         self.exhausted = False
         self.closed_gaps = 0
         self.dropped = 0
+        self.meeting: Meeting | None = None
+        #: the path joins the two trees (meet.py): the shot's segment count and the search cost of the join
+        self.met_segments = 0
+        self.met_cost = math.inf
 
     @property
     def expansions(self) -> int:
@@ -116,6 +121,30 @@ class GoalSide:
                 return True
             self.dropped += 1
         return False
+
+    def meet(self, forward: Any) -> bool:
+        """One round of :class:`~planner.hybrid_astar.meet.Meeting` between ``forward`` (the forward search) and
+        this side's tree; True (and :attr:`motions` set) when a shot joins them into a path that passes the exact
+        check."""
+        if self.motions is not None or self.exhausted:
+            return self.motions is not None
+        if self.meeting is None:
+            self.meeting = Meeting(self.planner)
+        hit = self.meeting.round(forward, self.run)
+        if hit is None:
+            return False
+        i, j, n = hit
+        mt, pl = self.meeting, self.planner
+        shot = [(float(mt.seg_roll[m]), float(mt.seg_curv[m]), float(mt.seg_len[m])) for m in range(n)]
+        motions = pl._chain(forward, i) + shot + [(0.0, 0.0, 0.0)] + goal_side_motions(pl._chain(self.run, j))
+        if not self._valid(motions):
+            self.dropped += 1
+            return False
+        self.motions = motions
+        self.met_segments = n
+        self.met_cost = (float(forward.node_f[i, 4]) + float(self.run.node_f[j, 4])
+                         + float(kernels._shot_cost(forward.p, int(forward.node_i[i, 2]), mt.seg_len, n)))
+        return True
 
     def _close_gap(self) -> bool:
         """The search ended within the goal tolerance of the start: shoot to the exact start from the node it

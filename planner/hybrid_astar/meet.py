@@ -1,0 +1,212 @@
+"""Meet in the middle: join the forward search's tree and the goal side's with an analytic shot.
+
+A problem with a manoeuvre at both ends (a sphere parked across a narrow bay at the start and across another
+at the goal) traps both searches of the two-ended search (:mod:`two_ended`): the forward search turns round in
+the start's bay, leaves it, and then has to turn round in the goal's bay as well, state by state, while the goal
+side does the same the other way round. Each alone fills both bays (``bays#4`` of the seed-21 real-map draw:
+220 k expansions, 3.4 s). Long before either gets through the far bay, both trees cover the ground between the
+bays, many of their nodes in nearly the same pose. A shot from a forward node to a goal-side node joins them: the
+forward chain to its node, the shot, and the goal side's chain run backwards (:func:`two_ended.goal_side_motions`)
+to the goal.
+
+Each tree's nodes are bucketed by (cell of :data:`CELL_M`, heading bin of 2π / :data:`YAW_BINS`), headings in the
+forward problem's frame (a goal-side node's turned by π); a bucket keeps its cheapest node (least g). After each
+round of chunks, every new node of one tree looks up the other tree's buckets in the same heading bin and the
+3 × 3 cells around its own; a pair is ranked by g_forward + an estimate of the shot + g_goal-side, and the best
+:data:`TRIES_PER_ROUND` pairs not tried before are shot at (:func:`kernels.try_shot`, collision-checked like every
+shot). A goal-side node is used only upright (held roll 0), so the shot ends upright where that node's chain
+starts. The joined path is checked like every goal-side path (rolled from the true start, exact footprint).
+
+The first join found is returned, as the first path of either search is: the smoother shortens it after.
+"""
+
+from __future__ import annotations
+
+import heapq
+import math
+from typing import Any
+
+import numpy as np
+from numba import njit
+
+from planner.hybrid_astar import kernels
+from planner.hybrid_astar.reeds_shepp import MAX_SHOT_M
+from planner.kinematics import wrap
+
+CELL_M = 0.5  # bucket size (m)
+YAW_BINS = 36  # heading bins of the buckets (10°)
+BEST_PER_ROUND = 64  # candidate pairs kept from one round's look-ups
+TRIES_PER_ROUND = 8  # shots tried per round
+PENDING_KEPT = 512  # untried candidate pairs carried over between rounds
+
+
+@njit(cache=True)
+def _bucket(x: float, y: float, yaw: float, ox: float, oy: float, cell: float, nx: int, ny: int, nyaw: int,
+            dx: int, dy: int) -> int:
+    """Bucket index of a pose, shifted by (dx, dy) cells; -1 outside the map."""
+    ix = int(math.floor((x - ox) / cell)) + dx
+    iy = int(math.floor((y - oy) / cell)) + dy
+    if ix < 0 or iy < 0 or ix >= nx or iy >= ny:
+        return -1
+    a = yaw - 2.0 * math.pi * math.floor(yaw / (2.0 * math.pi))
+    yb = int(a / (2.0 * math.pi) * nyaw) % nyaw
+    return (iy * nx + ix) * nyaw + yb
+
+
+@njit(cache=True)
+def index_nodes(node_f: np.ndarray, node_i: np.ndarray, lo: int, hi: int, turn: float, upright_roll: int,
+                ox: float, oy: float, cell: float, nx: int, ny: int, nyaw: int,
+                best_node: np.ndarray, best_g: np.ndarray) -> None:
+    """Put nodes [lo, hi) into the buckets (heading turned by ``turn``), each bucket keeping its least-g node;
+    ``upright_roll`` ≥ 0 keeps only nodes holding that roll index."""
+    for k in range(lo, hi):
+        if upright_roll >= 0 and node_i[k, 1] != upright_roll:
+            continue
+        b = _bucket(node_f[k, 0], node_f[k, 1], node_f[k, 2] + turn, ox, oy, cell, nx, ny, nyaw, 0, 0)
+        if b >= 0 and node_f[k, 4] < best_g[b]:
+            best_g[b] = node_f[k, 4]
+            best_node[b] = k
+
+
+@njit(cache=True)
+def find_pairs(node_f: np.ndarray, node_i: np.ndarray, lo: int, hi: int, turn: float, upright_roll: int,
+               other_f: np.ndarray, other_turn: float, other_node: np.ndarray,
+               ox: float, oy: float, cell: float, nx: int, ny: int, nyaw: int, rho: float, max_len: float,
+               out_a: np.ndarray, out_b: np.ndarray, out_cost: np.ndarray) -> int:
+    """For each node of [lo, hi) (heading turned by ``turn``; only roll index ``upright_roll`` if ≥ 0), the other
+    tree's bucket nodes in its heading bin and the 3 × 3 cells around: keep the ``out_cost.size`` cheapest pairs by
+    g + |Δxy| + ρ·|Δyaw| + g_other (a rough shot estimate: its ranking, not a bound). Returns how many were kept
+    (unordered)."""
+    cap = out_cost.size
+    n = 0
+    worst = 0
+    for k in range(lo, hi):
+        if upright_roll >= 0 and node_i[k, 1] != upright_roll:
+            continue
+        x, y, yaw = node_f[k, 0], node_f[k, 1], node_f[k, 2] + turn
+        for dy in range(-1, 2):
+            for dx in range(-1, 2):
+                b = _bucket(x, y, yaw, ox, oy, cell, nx, ny, nyaw, dx, dy)
+                if b < 0:
+                    continue
+                j = other_node[b]
+                if j < 0:
+                    continue
+                d = math.hypot(other_f[j, 0] - x, other_f[j, 1] - y)
+                if d > max_len:
+                    continue
+                dyaw = abs(wrap(other_f[j, 2] + other_turn - yaw))
+                cost = node_f[k, 4] + other_f[j, 4] + d + rho * dyaw
+                if n < cap:
+                    out_a[n], out_b[n], out_cost[n] = k, j, cost
+                    if n == 0 or cost > out_cost[worst]:
+                        worst = n
+                    n += 1
+                elif cost < out_cost[worst]:
+                    out_a[worst], out_b[worst], out_cost[worst] = k, j, cost
+                    worst = 0
+                    for m in range(1, cap):
+                        if out_cost[m] > out_cost[worst]:
+                            worst = m
+    return n
+
+
+def warm_up() -> None:
+    """Compile (or load from numba's cache) the look-up kernels on a one-node tree, with the argument types of
+    :meth:`Meeting.round`, so that no plan's time limit is spent on it (a plan meets only after thousands of
+    expansions, never in the search's own warm-up)."""
+    node_f, node_i = np.zeros((1, 5)), np.zeros((1, 3), dtype=np.int64)
+    node, g = np.full(YAW_BINS, -1, dtype=np.int64), np.full(YAW_BINS, np.inf)
+    geo = (0.0, 0.0, CELL_M, 1, 1, YAW_BINS)
+    index_nodes(node_f, node_i, 0, 1, math.pi, 0, *geo, node, g)
+    out_a, out_b, out_cost = np.zeros(1, dtype=np.int64), np.zeros(1, dtype=np.int64), np.zeros(1)
+    find_pairs(node_f, node_i, 0, 1, 0.0, -1, node_f, math.pi, node, *geo, 1.0, MAX_SHOT_M, out_a, out_b, out_cost)
+
+
+class Meeting:
+    """The bucket tables of both trees and the pairs still to shoot at, for one two-ended search.
+
+    ``forward`` and ``back`` are the two searches (search.py's ``_Search``: ``node_f``, ``node_i``, ``counters``,
+    ``p``); :meth:`round` indexes their new nodes, ranks new pairs and shoots at the best untried ones, returning
+    the forward node, the goal-side node and the shot's segments when one is free.
+    """
+
+    def __init__(self, planner: Any) -> None:
+        self.planner = planner
+        grid = planner.grid
+        self.ox, self.oy = planner.clearance.origin_x, planner.clearance.origin_y
+        self.nx = max(1, math.ceil(grid.width * grid.resolution_m / CELL_M))
+        self.ny = max(1, math.ceil(grid.height * grid.resolution_m / CELL_M))
+        n = self.nx * self.ny * YAW_BINS
+        self.f_node = np.full(n, -1, dtype=np.int64)
+        self.f_g = np.full(n, np.inf)
+        self.b_node = np.full(n, -1, dtype=np.int64)
+        self.b_g = np.full(n, np.inf)
+        self.f_done = 0  # nodes of each tree indexed so far
+        self.b_done = 0
+        self.pending: list[tuple[float, int, int]] = []
+        self.tried: set[tuple[int, int]] = set()
+        self.upright = int(planner.options.n_rolls // 2)
+        self.out_a = np.zeros(BEST_PER_ROUND, dtype=np.int64)
+        self.out_b = np.zeros(BEST_PER_ROUND, dtype=np.int64)
+        self.out_cost = np.zeros(BEST_PER_ROUND)
+        self.seg_roll, self.seg_curv, self.seg_len = (np.zeros(kernels.MAX_SHOT_SEGS) for _ in range(3))
+        self.shots = 0
+
+    def _collect(self, n: int) -> None:
+        for m in range(n):
+            pair = (int(self.out_a[m]), int(self.out_b[m]))
+            if pair not in self.tried:
+                heapq.heappush(self.pending, (float(self.out_cost[m]), *pair))
+
+    def round(self, forward: Any, back: Any) -> tuple[int, int, int] | None:
+        """Index both trees' new nodes, then shoot at the best untried pairs; (forward node, goal-side node,
+        segments written to ``seg_*``) for the first free shot, else None."""
+        pl = self.planner
+        geo = (self.ox, self.oy, CELL_M, self.nx, self.ny, YAW_BINS)
+        f_hi = int(forward.counters[kernels.C_NODES])
+        b_hi = int(back.counters[kernels.C_NODES])
+        index_nodes(forward.node_f, forward.node_i, self.f_done, f_hi, 0.0, -1, *geo, self.f_node, self.f_g)
+        index_nodes(back.node_f, back.node_i, self.b_done, b_hi, math.pi, self.upright, *geo, self.b_node, self.b_g)
+        rho = pl.robot.min_turning_radius_m
+        # new forward nodes against the goal side's buckets, new goal-side nodes against the forward ones
+        n = find_pairs(forward.node_f, forward.node_i, self.f_done, f_hi, 0.0, -1, back.node_f, math.pi, self.b_node,
+                       *geo, rho, MAX_SHOT_M, self.out_a, self.out_b, self.out_cost)
+        self._collect(n)
+        n = find_pairs(back.node_f, back.node_i, self.b_done, b_hi, math.pi, self.upright, forward.node_f, 0.0,
+                       self.f_node, *geo, rho, MAX_SHOT_M, self.out_b, self.out_a, self.out_cost)
+        self._collect(n)
+        self.f_done, self.b_done = f_hi, b_hi
+        if len(self.pending) > PENDING_KEPT:
+            self.pending = heapq.nsmallest(PENDING_KEPT, self.pending)
+            heapq.heapify(self.pending)
+        reverse = forward.p[kernels.P_ALLOW_REVERSE] > 0.5
+        kinds = (kernels.SHOT_WEIGHTED, kernels.SHOT_SHORTEST) if reverse else (kernels.SHOT_DUBINS,)
+        tries = 0
+        best: tuple[float, int, int, int] | None = None
+        seg = (np.zeros(kernels.MAX_SHOT_SEGS), np.zeros(kernels.MAX_SHOT_SEGS), np.zeros(kernels.MAX_SHOT_SEGS))
+        while self.pending and tries < TRIES_PER_ROUND:
+            _, i, j = heapq.heappop(self.pending)
+            if (i, j) in self.tried:
+                continue
+            self.tried.add((i, j))
+            tries += 1
+            x, y, yaw, roll = (float(v) for v in forward.node_f[i, :4])
+            bx, by, byaw = (float(v) for v in back.node_f[j, :3])
+            for kind in kinds:
+                self.shots += 1
+                n = kernels.try_shot(pl.clearance.clearance, pl.clearance.blocked, forward.p, pl.footprint.offsets_x,
+                                     pl.footprint.offsets_y, pl._px, pl._py, x, y, yaw, roll, bx, by,
+                                     wrap(byaw + math.pi), 0.0, *seg, MAX_SHOT_M, 0.0, kind)
+                if n > 0:
+                    cost = (float(forward.node_f[i, 4]) + float(back.node_f[j, 4])
+                            + float(kernels._shot_cost(forward.p, int(forward.node_i[i, 2]), seg[2], n)))
+                    if best is None or cost < best[0]:
+                        best = (cost, i, j, n)
+                        for a, b in zip((self.seg_roll, self.seg_curv, self.seg_len), seg, strict=True):
+                            a[:n] = b[:n]
+                    break
+        return None if best is None else best[1:]
+
+
+__all__ = ["CELL_M", "YAW_BINS", "Meeting", "find_pairs", "index_nodes", "warm_up"]

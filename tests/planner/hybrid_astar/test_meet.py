@@ -1,0 +1,92 @@
+"""Meet in the middle (planner/hybrid_astar/meet.py): the bucket look-up pairs a forward node with a goal-side node
+of nearly the same pose (the goal side's heading turned by π, upright only), and a problem with a manoeuvre at both
+ends that the two-ended search alone needs 220 k expansions for is joined within a few tens of thousands."""
+
+import math
+
+import numpy as np
+import pytest
+
+from planner.errors import NoValidPathFound
+from planner.hybrid_astar import search
+from planner.hybrid_astar.meet import CELL_M, YAW_BINS, find_pairs, index_nodes
+from planner.hybrid_astar.search import HybridAStar
+from planner.maps.nav2 import load_map
+from planner.robot import load_robot
+from planner.termination import Termination
+from tests.pathcheck import check_path
+
+ROBOT = load_robot("zju-60")
+UPRIGHT = 3  # roll index of the upright roll among 7
+
+
+def _nodes(rows):
+    """node_f (x, y, yaw, roll, g) and node_i (parent, roll index, direction) from (x, y, yaw, roll index, g)."""
+    node_f = np.array([(x, y, yaw, 0.0, g) for x, y, yaw, _, g in rows], float)
+    node_i = np.array([(-1, ri, 1) for *_, ri, _ in rows], dtype=np.int64)
+    return node_f, node_i
+
+
+def _pairs(forward, back):
+    nx = ny = 40  # a 20 m × 20 m map
+    geo = (0.0, 0.0, CELL_M, nx, ny, YAW_BINS)
+    b_node = np.full(nx * ny * YAW_BINS, -1, dtype=np.int64)
+    b_g = np.full(nx * ny * YAW_BINS, np.inf)
+    index_nodes(back[0], back[1], 0, len(back[0]), math.pi, UPRIGHT, *geo, b_node, b_g)
+    out_a, out_b, out_cost = np.zeros(8, np.int64), np.zeros(8, np.int64), np.zeros(8)
+    n = find_pairs(forward[0], forward[1], 0, len(forward[0]), 0.0, -1, back[0], math.pi, b_node, *geo, 1.0, 10.0,
+                   out_a, out_b, out_cost)
+    return sorted((int(out_a[m]), int(out_b[m]), float(out_cost[m])) for m in range(n))
+
+
+def test_a_forward_node_is_paired_with_the_cheapest_upright_goal_side_node_of_its_pose_turned_by_pi():
+    forward = _nodes([(5.1, 5.1, 0.3, 2, 1.0), (15.0, 15.0, 0.3, UPRIGHT, 1.0)])
+    back = _nodes([
+        (5.2, 5.0, 0.3 + math.pi, UPRIGHT, 4.0),   # the same pose in the forward frame: paired
+        (5.3, 5.2, 0.3 + math.pi, UPRIGHT, 2.0),   # same bucket, cheaper: kept instead of the first
+        (5.1, 5.1, 0.3 + math.pi, 1, 0.5),         # not upright: never used
+        (5.1, 5.1, 0.3, UPRIGHT, 0.5),             # heading not turned: faces the other way in the forward frame
+    ])
+    pairs = _pairs(forward, back)
+    assert [(a, b) for a, b, _ in pairs] == [(0, 1)]
+    a, b, cost = pairs[0]
+    assert cost == pytest.approx(1.0 + 2.0 + math.hypot(0.2, 0.1))
+
+
+def test_a_node_in_the_next_cell_is_paired_and_one_two_cells_away_is_not():
+    forward = _nodes([(5.45, 5.25, 0.0, UPRIGHT, 0.0)])
+    near = _nodes([(5.55, 5.25, math.pi, UPRIGHT, 0.0)])   # the cell to the right
+    far = _nodes([(6.55, 5.25, math.pi, UPRIGHT, 0.0)])    # two cells to the right
+    assert [(a, b) for a, b, _ in _pairs(forward, near)] == [(0, 0)]
+    assert _pairs(forward, far) == []
+
+
+def _two_bays():
+    """bays#4 of the real-map bench (seed 21): parked across one narrow bay, to be parked across another; each
+    search alone has to turn round in both bays (220 k expansions, 3.4 s before meet.py)."""
+    grid = load_map("maps/real/bays.yaml")
+    return grid, (13.525, 4.675, -0.17305013294831584), (15.025, 12.375, 2.828541932511997)
+
+
+def test_a_manoeuvre_at_both_ends_is_joined_in_the_middle(monkeypatch):
+    grid, start, goal = _two_bays()
+    cap = Termination(time_limit_s=120.0, max_iterations=40_000)
+    result = HybridAStar(grid, ROBOT).plan(start, goal, cap)
+    assert result.extra["found_from"] == "both"
+    assert np.allclose(result.states[0, :3], start, atol=1e-9)
+    assert check_path(grid, ROBOT, result.states, start, goal) == []  # rollable, collision-free, at the goal
+    # without the join the same cap is not enough
+    monkeypatch.setattr(search, "MEET_AFTER", 10**9)
+    with pytest.raises(NoValidPathFound):
+        HybridAStar(grid, ROBOT).plan(start, goal, cap)
+
+
+def test_a_problem_solved_before_the_join_starts_is_unchanged(monkeypatch):
+    # bays#9 of the real-map bench (seed 0): the goal side finds it in a few thousand expansions
+    grid = load_map("maps/real/bays.yaml")
+    start, goal = (9.325, 7.675, -0.44124258698566), (11.775, 5.325, 2.9937010606132253)
+    joined = HybridAStar(grid, ROBOT).plan(start, goal)
+    monkeypatch.setattr(search, "MEET_AFTER", 10**9)
+    alone = HybridAStar(grid, ROBOT).plan(start, goal)
+    assert joined.expansions == alone.expansions < 10_000
+    assert joined.length_m == alone.length_m and joined.extra["found_from"] == "goal"
