@@ -29,6 +29,7 @@ from planner.robot import RobotProfile
 from planner.termination import Termination
 
 KINDS = ("boxes", "aisle", "door")
+ROUTE_OPTIONS = PlannerOptions(open_step_factor=1)  # the planner settings the worlds' routes are planned with
 KEEP_CLEAR_M = 2.5
 """Nothing is hidden this close to the start or the goal."""
 WALL_REACH_M = 8.0
@@ -91,7 +92,10 @@ def build_world(spec: WorldSpec, robot: RobotProfile) -> World:
     """The known map and the true world of ``spec`` (see the module docstring)."""
     known = load_any(spec.map)
     rng = np.random.default_rng(spec.seed)
-    route = HybridAStar(known, robot, PlannerOptions()).plan(spec.start, spec.goal, Termination(10.0)).states
+    # the route the hidden obstacles are put on is planned with one step per expansion everywhere, as when the
+    # sweep was made: a door is put at the route's narrowest place, so a route found otherwise moves the door
+    # (bench-around-door: with long steps in the open, to where a detour remains) and the sweep's worlds with it
+    route = HybridAStar(known, robot, ROUTE_OPTIONS).plan(spec.start, spec.goal, Termination(10.0)).states
     xy, s = route[:, :2], route[:, 6]
     total = float(s[-1])
     ends = np.array([spec.start[:2], spec.goal[:2]])

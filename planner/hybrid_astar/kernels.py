@@ -35,11 +35,12 @@ N_COUNTERS = 10
 (P_OX, P_OY, P_RES, P_RC, P_HOX, P_HOY, P_HCELL, P_RHO, P_GX, P_GY, P_GYAW, P_TOL_XY, P_TOL_YAW, P_RADIUS,
  P_STEP, P_SPACING, P_NON_STRAIGHT, P_CHANGE, P_REVERSE, P_SWITCH, P_COST_PENALTY, P_PROX_RANGE, P_GREED,
  P_SHOT_RATIO, P_MAX_ROLL, P_USE_DUBINS, P_ALLOW_REVERSE, P_N_YAW, P_USE_RS, P_RS_CELL, P_RS_HALF,
- P_PREFERRED, P_REACH, P_BEST_H, P_REJECT, P_CLOSER_H, P_HELD_COST, P_BACK_SHARE, P_BOUND) = range(39)
-N_PARAMS = 39
+ P_PREFERRED, P_REACH, P_BEST_H, P_REJECT, P_CLOSER_H, P_HELD_COST, P_BACK_SHARE, P_BOUND, P_LONG) = range(40)
+N_PARAMS = 40
 BEST_SHOT_EVERY = 256  # reversing: every this many expansions, a Reeds–Shepp shot from the closest node if new
 NEAR_TIE = 1.05  # the second / third cheapest Reeds–Shepp word is shot only within this ratio of the cheapest
 MAX_SHOT_SEGS = 6  # a Dubins shot has 3 segments, a Reeds–Shepp shot up to 5
+OPEN_MIN_H = 3.0  # long steps in the open only this far (heuristic metres) from the goal
 HOLD_EXPANSIONS = 4000  # a held-back shot waits this many expansions for a path that rolls forwards more
 
 
@@ -444,9 +445,9 @@ def _backwards(node_f: np.ndarray, node_i: np.ndarray, k: int, step: float, seg_
     back = 0.0
     total = 0.0
     while node_i[k, 0] >= 0:
-        total += step
+        total += step * abs(node_i[k, 2])
         if node_i[k, 2] < 0:
-            back += step
+            back -= step * node_i[k, 2]
         k = node_i[k, 0]
     for m in range(n):
         total += abs(seg_len[m])
@@ -460,7 +461,7 @@ def _shot_cost(p: np.ndarray, parent_dir: int, seg_len: np.ndarray, n: int) -> f
     """The search's direction-weighted cost of ``n`` shot segments after a motion in direction ``parent_dir``:
     backward metres × reverse multiplier, a switch cost per change of direction."""
     cost = 0.0
-    last = parent_dir
+    last = 1 if parent_dir > 0 else -1 if parent_dir < 0 else 0
     for m in range(n):
         s = seg_len[m]
         if abs(s) < 1e-12:
@@ -498,7 +499,7 @@ def search_chunk(
 ) -> int:
     """Run up to ``max_expansions`` Hybrid-A* expansions.
 
-    node_f[k] = (x, y, yaw, roll, g); node_i[k] = (parent, roll index, direction ±1).
+    node_f[k] = (x, y, yaw, roll, g); node_i[k] = (parent, roll index, direction ±1 × steps rolled).
     """
     w = clear.shape[1]
     n_roll = rolls.size
@@ -601,7 +602,19 @@ def search_chunk(
                     if counters[C_HELD_UNTIL] == 0:
                         counters[C_HELD_UNTIL] = counters[C_EXPANSIONS] + HOLD_EXPANSIONS
         # 4. Expand: every held roll, forward (and reverse), one exact step of eq. 1.
-        parent_dir = node_i[k, 2]
+        #    In the open (the stored clearance of the node's cell exceeds the covering circles' reach and radius,
+        #    the longest sideways shift and P_LONG steps: the circles stay clear wherever the child goes) and over
+        #    OPEN_MIN_H from the goal, a child rolls P_LONG steps at once (item 3 of issue 21: fewer expansions where
+        #    there is room); its sweep is checked as any.
+        #    node_i[., 2] then holds direction × steps.
+        parent_dir = 1 if node_i[k, 2] > 0 else -1 if node_i[k, 2] < 0 else 0
+        mult = 1
+        if p[P_LONG] > 1.0 and h_here > OPEN_MIN_H:
+            nix = int(math.floor((x - p[P_OX]) / p[P_RES]))
+            niy = int(math.floor((y - p[P_OY]) / p[P_RES]))
+            if (0 <= nix < w and 0 <= niy < clear.shape[0]
+                    and clear[niy, nix] >= p[P_REACH] + p[P_RC] + p[P_LONG] * step + 2.0 * radius * p[P_MAX_ROLL]):
+                mult = int(p[P_LONG])
         shift_worst[:] = math.nan
         for d in range(2):
             direction = 1 if d == 0 else -1
@@ -610,7 +623,7 @@ def search_chunk(
             for ri in range(n_roll):
                 d_roll = rolls[ri] - roll
                 cx, cy = roll_shift(x, y, yaw, radius, d_roll)
-                cx, cy, cyaw = arc_step(cx, cy, yaw, curvs[ri], direction * step)
+                cx, cy, cyaw = arc_step(cx, cy, yaw, curvs[ri], direction * step * mult)
                 cyaw = wrap(cyaw)
                 # a child already expanded is dropped before its (far dearer) collision sweep
                 ckey = _closed_key(p, w, cx, cy, cyaw, roll_bins[ri], n_roll_bins)
@@ -623,8 +636,8 @@ def search_chunk(
                 if shift_worst[ri] < 0.0:
                     continue
                 x1, y1 = roll_shift(x, y, yaw, radius, d_roll)
-                margin = _arc_margin(clear, blocked, p, offx, offy, px, py, x1, y1, yaw, curvs[ri], direction * step,
-                                     shift_worst[ri])
+                margin = _arc_margin(clear, blocked, p, offx, offy, px, py, x1, y1, yaw, curvs[ri],
+                                     direction * step * mult, shift_worst[ri])
                 if margin < 0.0:
                     continue
                 h = _heuristic(htab, rs, p, cx, cy, cyaw)
@@ -636,7 +649,7 @@ def search_chunk(
                 prox = 0.0
                 if p[P_PROX_RANGE] > 0.0:
                     prox = max(0.0, 1.0 - margin / p[P_PROX_RANGE])
-                travel = (step + shift) * (1.0 + p[P_COST_PENALTY] * prox)
+                travel = (step * mult + shift) * (1.0 + p[P_COST_PENALTY] * prox)
                 if abs(curvs[ri]) > 1e-12:
                     travel *= p[P_NON_STRAIGHT]
                 if direction < 0:
@@ -655,7 +668,7 @@ def search_chunk(
                 node_f[c, 4] = cg
                 node_i[c, 0] = k
                 node_i[c, 1] = ri
-                node_i[c, 2] = direction
+                node_i[c, 2] = direction * mult
                 counters[C_NODES] = c + 1
                 heap_push(heap_keys, heap_vals, heap_size, cg + h * (1.0 + greed), c)
     return RUNNING

@@ -87,6 +87,7 @@ class PlannerOptions:
     n_yaw_bins: int = 72              # closed-set heading bins (5°)
     n_roll_bins: int = 3              # closed-set roll bins (left/upright/right; 0 = one per held roll)
     step_m: float = 0.0               # arc length per expansion; 0 = automatic (see ``resolved_step``)
+    open_step_factor: int = 3         # in the open (clearance > footprint reach + the longer arc), steps this long
     allow_reverse: bool | None = None  # None = the robot's own ``reversible`` (true for the spheres)
     dead_end_check: bool = True       # search from the goal too (two_ended.py): finds the path or proves a dead end
     n_circles: int = 3                # covering circles of the footprint (paper 001 Fig. 6)
@@ -125,6 +126,7 @@ class PlannerOptions:
              "n_roll_bins", "must be 0 (one per held roll) or an odd number in [3, n_rolls]")
         need(0 <= self.step_m <= MAX_STEP_M, "step_m", f"must be in [0, {MAX_STEP_M:g}] m (0 = automatic)")
         need(1 <= self.n_circles <= 16, "n_circles", "must be in [1, 16]")
+        need(1 <= self.open_step_factor <= 8, "open_step_factor", "must be in [1, 8] (1 = every step the same)")
         need(self.goal_tolerance_m > 0, "goal_tolerance_m", "must be > 0")
         need(self.goal_tolerance_yaw_rad > 0, "goal_tolerance_yaw_rad", "must be > 0")
         for name in ("non_straight_penalty", "reverse_penalty"):
@@ -395,6 +397,7 @@ class HybridAStar:
         p[kernels.P_RS_HALF] = self.rs_table.shape[2] // 2
         p[kernels.P_ALLOW_REVERSE] = 1.0 if reverse else 0.0
         p[kernels.P_N_YAW] = o.n_yaw_bins
+        p[kernels.P_LONG] = float(o.open_step_factor)
         return p
 
     def _check_endpoint(self, pose: Pose, which: str) -> None:
