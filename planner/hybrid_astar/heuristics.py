@@ -227,20 +227,14 @@ def _build_reeds_shepp_table(rho: float, n_yaw: int, cell_m: float, half_width_m
     for k in range(n_yaw // 2 + 1, n_yaw + 1):
         weighted[k] = weighted[n_yaw - k, ::-1]
         shortest[k] = shortest[n_yaw - k, ::-1]
-    table = np.empty((n_yaw, 2 * n, 2 * n))
-    for samples, out in ((weighted, table), (shortest, None)):
-        corners = [samples[dk:dk + n_yaw, dj:dj + 2 * n, di:di + 2 * n]
-                   for dk in (0, 1) for dj in (0, 1) for di in (0, 1)]
-        low = np.minimum.reduce(corners)
-        if out is not None:
-            out[:] = low
-            continue
-        # Near the goal the weighted cost jumps by a cusp's cost across thin slivers (a short word without a cusp
-        # exists only in a narrow cone), thinner than a bin, so its corners miss them: there the bin falls back to
-        # the distance, which the weighted cost never goes below.
-        centre = (np.arange(2 * n) - n + 0.5) * cell_m
-        near = np.hypot(centre[None, :], centre[:, None]) < NEAR_GOAL_M + cell_m
-        table[:, near] = low[:, near]
+    lows = [np.minimum.reduce([samples[dk:dk + n_yaw, dj:dj + 2 * n, di:di + 2 * n]
+                               for dk in (0, 1) for dj in (0, 1) for di in (0, 1)]) for samples in (weighted, shortest)]
+    # Near the goal the weighted cost jumps by a cusp's cost across thin slivers (a short word without a cusp exists
+    # only in a narrow cone), thinner than a bin, so its corners miss them: there the bin holds the distance, which
+    # the weighted cost never goes below.
+    centre = (np.arange(2 * n) - n + 0.5) * cell_m
+    near = np.hypot(centre[None, :], centre[:, None]) < NEAR_GOAL_M + cell_m
+    table = np.where(near, lows[1], lows[0])
     # the cost is not monotone inside a bin (it dips by a few mm between corners): keep a cell of margin
     return np.maximum(table - RS_TABLE_MARGIN_CELLS * cell_m, 0.0)
 
