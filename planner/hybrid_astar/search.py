@@ -74,7 +74,7 @@ GOAL_CHECK_SHARE = 0.15  # ... and at most this share of the time limit
 GOAL_SIDE_AFTER = 2_000  # expansions without a path before the goal side's search joins in (two_ended.py)
 FORWARD_RETRY_MIN = 20_000  # expansions a forward-only search may always take to find a cheaper path
 FORWARD_RETRY_SHARE = 0.5  # ... tried when the path found rolls more than this share of its length backwards
-FORWARD_CHECK_BUDGET = 2_000  # ... unless a forward-only search from the goal exhausts within this many (a dead end)
+FORWARD_CHECK_BUDGET = 1_000  # ... unless a forward-only search from the goal exhausts within this many (a dead end)
 CLOSED_SET_BUDGET_MB = 1024  # the closed-set bitset of one plan may not exceed this (≈ 6300² cells at defaults, tested)
 
 
@@ -463,8 +463,12 @@ class HybridAStar:
             expansions += side.expansions
             extra["goal_side_expansions"] = side.expansions
         if self.reverse and o.prefer_forward:
+            checked: list[int] = []
             fwd, forward = self._forward_alternative(start, goal, heur, o, clock, motions, found.expansions,
-                                                     self._search_cost(found))
+                                                     self._search_cost(found), checked)
+            if checked:
+                expansions += checked[0]
+                extra["forward_check_expansions"] = checked[0]
             if fwd is not None:
                 expansions += fwd.expansions
                 extra["forward_alternative_expansions"] = fwd.expansions
@@ -585,6 +589,7 @@ class HybridAStar:
     def _forward_alternative(
         self, start: Pose, goal: Pose, heur: HolonomicHeuristic, o: PlannerOptions, clock: Clock,
         motions: list[tuple[float, float, float]], expansions: int, bound: float = math.inf,
+        checked: list[int] | None = None,
     ) -> tuple[_Search | None, list[tuple[float, float, float]] | None]:
         """The forward-only search run (None when not tried) and its path when it costs less than ``motions``
         by :meth:`_travel_cost` (else None).
@@ -595,7 +600,9 @@ class HybridAStar:
         (more than FORWARD_RETRY_SHARE; backing out of a dead end is fine) and a forward path could be cheaper
         (the Dubins distance is below its cost), a forward-only search (whose Dubins heuristic does
         see the turn) gets at most max(FORWARD_RETRY_MIN, the first search's) expansions and what is left of
-        the time limit; the cheaper of the two paths is returned.
+        the time limit; the cheaper of the two paths is returned. It is not run when a forward-only search of the
+        reverse problem from the goal exhausts within FORWARD_CHECK_BUDGET expansions (no forward path reaches
+        the goal); that check's expansions are appended to ``checked``.
         """
         backwards = sum(-s for _, _, s in motions if s < 0)
         if backwards <= FORWARD_RETRY_SHARE * self._length(start, motions):
@@ -604,7 +611,7 @@ class HybridAStar:
         if dubins_distance(*start, *goal, self.robot.min_turning_radius_m) >= cost:
             return None, None
         if self.goal_side_ok and self._reverse_search(
-                start, goal, o, clock, reverse=False, budget=FORWARD_CHECK_BUDGET) is not None:
+                start, goal, o, clock, reverse=False, budget=FORWARD_CHECK_BUDGET, spent=checked) is not None:
             return None, None  # the goal cannot be approached rolling forwards: no forward path exists
         run = _Search(self, start, goal, heur, o, False)
         run.p[kernels.P_BOUND] = bound
@@ -624,14 +631,14 @@ class HybridAStar:
         return float(run.node_f[k, 4]) + float(kernels._shot_cost(run.p, int(run.node_i[k, 2]), run.seg_len, n))
 
     def _reverse_search(self, start: Pose, goal: Pose, o: PlannerOptions, clock: Clock, reverse: bool | None = None,
-                        budget: int = GOAL_CHECK_BUDGET) -> int | None:
+                        budget: int = GOAL_CHECK_BUDGET, spent: list[int] | None = None) -> int | None:
         """Search the reverse problem within ``budget`` expansions: from the goal to the start with every motion
         run backwards. A path run backwards is rolled by the same kinematics with the heading turned by π (and the
         roll mirrored, which maps the symmetric roll set onto itself); a reversible robot's motion set is its own
         reverse, a forward-only one's is forward-only with the heading turned by π. ``reverse`` (default the
         planner's) says which motions the path may use. Returns the number of states from which the goal can be
         reached when that search exhausts them all (so the start is not among them), else None (also when
-        ``clock`` runs out)."""
+        ``clock`` runs out). Its expansions are appended to ``spent`` when given."""
         reverse = self.reverse if reverse is None else reverse
         flip = 0.0 if reverse else math.pi
         back_start = (goal[0], goal[1], wrap(goal[2] + flip))
@@ -640,13 +647,17 @@ class HybridAStar:
             return None
         heur = self.holonomic(back_goal[:2], back_start[:2])
         run = _Search(self, back_start, back_goal, heur, o, reverse)
+        exhausted = None
         while run.expansions < budget and not clock.expired():
             status = run.step(min(self.chunk_expansions(o), budget - run.expansions))
             if status == kernels.EXHAUSTED:
-                return run.expansions
+                exhausted = run.expansions
+                break
             if status == kernels.FOUND:
-                return None
-        return None
+                break
+        if spent is not None:
+            spent.append(run.expansions)
+        return exhausted
 
     def _knots(self, start: Pose, motions: list[tuple[float, float, float]], roll: float = 0.0) -> np.ndarray:
         """Pose (x, y, yaw, roll) and distance travelled at the start and after every motion: (n+1, 5)."""

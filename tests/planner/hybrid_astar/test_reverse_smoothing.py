@@ -130,6 +130,7 @@ def test_a_goal_that_cannot_be_approached_forwards_skips_the_forward_search() ->
                                         budget=FORWARD_CHECK_BUDGET)
     assert exhausted is not None and exhausted < 100
     assert "forward_alternative_expansions" not in result.extra
+    assert result.extra["forward_check_expansions"] == exhausted  # counted in the result's expansions
     # the garage's goal can be approached forwards: there the forward search still runs and wins (test above)
     assert HybridAStar(load_map("maps/garage.yaml"), ROBOT, o)._reverse_search(
         START, GOAL, o, Termination(10).start(), reverse=False, budget=FORWARD_CHECK_BUDGET) is None
