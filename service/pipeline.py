@@ -13,9 +13,8 @@ import time
 from dataclasses import dataclass, field, replace
 
 from planner.errors import GoalOutsideMap, InvalidInput, PlannerTimedOut, StartOutsideMap
-from planner.hybrid_astar.heuristics import reeds_shepp_table
 from planner.hybrid_astar.plan import plan_path, planner_for
-from planner.hybrid_astar.search import RS_CELL_M, PlannerOptions, Pose, warm_up
+from planner.hybrid_astar.search import PlannerOptions, Pose, rs_table_for, warm_up
 from planner.maps.reachability import prepare as prepare_reachability
 from planner.occupancy import OccupancyGrid
 from planner.result import PlanResult
@@ -80,14 +79,15 @@ def execute_plan(query: PlanQuery, grid: OccupancyGrid, robot: RobotProfile) -> 
     warm_up()  # one-off compilation happens before the clock
     options = query.options
     reverse = robot.reversible if options.allow_reverse is None else options.allow_reverse
-    if reverse and options.n_yaw_bins == DEFAULT_OPTIONS.n_yaw_bins:
+    if reverse and options.n_yaw_bins == DEFAULT_OPTIONS.n_yaw_bins and not options.weighted_rs_heuristic:
         # one-off per built-in robot, like compilation (cached per process): before the clock
-        reeds_shepp_table(robot.min_turning_radius_m, options.n_yaw_bins, RS_CELL_M)
+        rs_table_for(robot, options)
     clock = query.termination.start()
     if reverse:
         # request-sized precomputation is inside the limit and stops at it: the Reeds–Shepp table for the
-        # request's own options.n_yaw_bins (≈ 6 s at 720 bins; cached per process once built)
-        reeds_shepp_table(robot.min_turning_radius_m, options.n_yaw_bins, RS_CELL_M, clock=clock)
+        # request's own options.n_yaw_bins (≈ 6 s at 720 bins, and a table per weights with
+        # options.weighted_rs_heuristic; cached per process once built)
+        rs_table_for(robot, options, clock)
     # the map's preprocessing (distance transform; its size is the map's, bounded where the map is accepted) is
     # cached per map and not counted
     t_map = time.perf_counter()

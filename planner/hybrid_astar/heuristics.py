@@ -21,7 +21,9 @@ import numpy as np
 from numba import njit
 
 from planner.errors import PlannerCancelled, PlannerTimedOut
+from planner.hybrid_astar.dubins import dubins_shortest
 from planner.hybrid_astar.heap import heap_pop, heap_push
+from planner.hybrid_astar.reeds_shepp import MAX_SEGS, MAX_WORDS, rs_words, word_cost
 
 if TYPE_CHECKING:
     from planner.termination import Clock
@@ -137,48 +139,80 @@ def _dijkstra16(mult: np.ndarray, gx: int, gy: int, cell_m: float, sx: int, sy: 
     return dist
 
 
-_RS_TABLES: OrderedDict[tuple[float, int, float, float], np.ndarray] = OrderedDict()
+_RS_TABLES: OrderedDict[tuple[float, int, float, float, float, float], np.ndarray] = OrderedDict()
 _RS_TABLES_KEPT = 4
+RS_TABLE_MARGIN_CELLS = 1.0  # the table's margin below its bin's sampled minimum, in cells (see reeds_shepp_table)
+NEAR_GOAL_M = 0.6  # within this of the goal the table holds the Reeds–Shepp distance (see _build_reeds_shepp_table)
 
 
 def reeds_shepp_table(rho: float, n_yaw: int = 72, cell_m: float = 0.1, half_width_m: float = 0.0,
-                      clock: Clock | None = None) -> np.ndarray:
-    """Reeds–Shepp distance to a goal at the origin (heading 0), from OMPL's ``ReedsSheppStateSpace``.
+                      clock: Clock | None = None, reverse_penalty: float = 1.0, switch_cost_m: float = 0.0
+                      ) -> np.ndarray:
+    """Cost of the cheapest Reeds–Shepp word to a goal at the origin (heading 0) under the search's direction
+    weights: forward metres + ``reverse_penalty`` × backward metres + ``switch_cost_m`` per cusp, the forward-only
+    Dubins word a candidate too (:func:`planner.hybrid_astar.reeds_shepp.rs_best`'s cost). With the weights
+    (1, 0) it is the Reeds–Shepp distance (OMPL's ``ReedsSheppStateSpace``, tested).
 
-    Used as the non-holonomic heuristic when reversing is allowed (Dubins is not a lower bound then).
+    Used as the non-holonomic heuristic when reversing is allowed (Dubins is not a lower bound then). With the
+    search's own weights it prices what the search pays for rolling backwards and for each cusp, so where turning
+    round costs less than reversing the heuristic says so (the plain distance sees both as equally long).
     Sampled every ``cell_m`` over ±``half_width_m`` (default max(3 m, 3ρ)) and every 2π/``n_yaw``, then
     each bin holds the minimum over its 8 corner samples less one cell, so a lookup at any pose inside the
-    bin does not exceed OMPL's distance there (checked on random poses in the tests). Shape (n_yaw, 2n, 2n) with
-    n = half_width / cell; built once per (ρ, bins) in a process (≈ 0.6 s at 72 bins, ten times that at 720).
-    Its size is the request's (``n_yaw``), so with ``clock`` the build stops at the clock's deadline or cancel
-    (:class:`~planner.errors.PlannerTimedOut` / :class:`~planner.errors.PlannerCancelled`) and keeps nothing.
+    bin does not exceed the cheapest word's cost there (checked on random poses in the tests). Shape
+    (n_yaw, 2n, 2n) with n = half_width / cell; compiled from the closed-form words (≈ 0.2 s at 72 bins), built
+    once per (ρ, bins, weights) in a process. Its size is the request's (``n_yaw``), so with ``clock`` the build
+    stops at the clock's deadline or cancel (:class:`~planner.errors.PlannerTimedOut` /
+    :class:`~planner.errors.PlannerCancelled`) and keeps nothing.
     """
-    key = (float(rho), int(n_yaw), float(cell_m), float(half_width_m))
+    key = (float(rho), int(n_yaw), float(cell_m), float(half_width_m), float(reverse_penalty), float(switch_cost_m))
     cached = _RS_TABLES.get(key)
     if cached is not None:
         _RS_TABLES.move_to_end(key)
         return cached
-    table = _build_reeds_shepp_table(rho, n_yaw, cell_m, half_width_m, clock)
+    table = _build_reeds_shepp_table(rho, n_yaw, cell_m, half_width_m, clock, reverse_penalty, switch_cost_m)
     _RS_TABLES[key] = table
     while len(_RS_TABLES) > _RS_TABLES_KEPT:
         _RS_TABLES.popitem(last=False)
     return table
 
 
-def _build_reeds_shepp_table(rho: float, n_yaw: int, cell_m: float, half_width_m: float,
-                             clock: Clock | None) -> np.ndarray:
-    from ompl import base as ob
+@njit(cache=True)
+def _word_costs(yaw: float, coords: np.ndarray, rho: float, reverse_penalty: float, switch_cost: float,
+                weighted: np.ndarray, shortest: np.ndarray) -> None:
+    """From (coords[i], coords[j], yaw) to the origin (heading 0): ``weighted[j, i]``, the cheapest word under the
+    weights (forward Dubins and backward Dubins words among the candidates), and ``shortest[j, i]``, the
+    Reeds–Shepp distance."""
+    turns = np.empty((MAX_WORDS, MAX_SEGS), dtype=np.int64)
+    lens = np.empty((MAX_WORDS, MAX_SEGS))
+    c, s = math.cos(yaw), math.sin(yaw)
+    for j in range(coords.size):
+        for i in range(coords.size):
+            # the goal (origin, heading 0) in the pose's frame, in units of ρ
+            dx, dy = -coords[i], -coords[j]
+            x, y, phi = (c * dx + s * dy) / rho, (-s * dx + c * dy) / rho, -yaw
+            best, dist = math.inf, math.inf
+            for k in range(rs_words(x, y, phi, turns, lens)):
+                best = min(best, word_cost(lens[k], rho, reverse_penalty, switch_cost))
+                dist = min(dist, word_cost(lens[k], rho, 1.0, 0.0))
+            word, t, p, q = dubins_shortest(0.0, 0.0, 0.0, x, y, phi, 1.0)
+            if word >= 0:
+                best = min(best, rho * (t + p + q))
+            # rolling backwards all the way: the time-flipped goal's forward Dubins word
+            word, t, p, q = dubins_shortest(0.0, 0.0, 0.0, -x, y, -phi, 1.0)
+            if word >= 0:
+                best = min(best, reverse_penalty * rho * (t + p + q))
+            weighted[j, i] = best
+            shortest[j, i] = dist
 
+
+def _build_reeds_shepp_table(rho: float, n_yaw: int, cell_m: float, half_width_m: float,
+                             clock: Clock | None, reverse_penalty: float, switch_cost_m: float) -> np.ndarray:
     half = half_width_m or max(3.0, 3.0 * rho)
     n = round(half / cell_m)
-    space = ob.ReedsSheppStateSpace(rho)
-    state, goal = space.allocState(), space.allocState()
-    goal.setX(0.0)
-    goal.setY(0.0)
-    goal.setYaw(0.0)
     coords = (np.arange(2 * n + 1) - n) * cell_m
-    samples = np.empty((n_yaw + 1, 2 * n + 1, 2 * n + 1))
-    for k in range(n_yaw + 1):
+    weighted = np.empty((n_yaw + 1, 2 * n + 1, 2 * n + 1))
+    shortest = np.empty_like(weighted)
+    for k in range(n_yaw // 2 + 1):
         if clock is not None:
             if clock.cancelled():
                 raise PlannerCancelled("cancelled while building the Reeds–Shepp heuristic table")
@@ -186,16 +220,23 @@ def _build_reeds_shepp_table(rho: float, n_yaw: int, cell_m: float, half_width_m
                 raise PlannerTimedOut(f"the time limit of {clock.time_limit_s:g} s ran out while building the "
                                       f"Reeds–Shepp heuristic table for {n_yaw} yaw bins (options.n_yaw_bins)",
                                       planning_time_s=clock.elapsed_s())
-        yaw = -math.pi + 2.0 * math.pi * k / n_yaw
-        state.setYaw(yaw if yaw < math.pi else -math.pi)  # OMPL's SO(2) is [−π, π)
-        for j, y in enumerate(coords):
-            state.setY(float(y))
-            for i, x in enumerate(coords):
-                state.setX(float(x))
-                samples[k, j, i] = space.distance(state, goal)
-    corners = [samples[dk:dk + n_yaw, dj:dj + 2 * n, di:di + 2 * n] for dk in (0, 1) for dj in (0, 1) for di in (0, 1)]
-    # the distance is not monotone inside a bin (it dips by a few mm between corners): keep a cell of margin
-    return np.maximum(np.minimum.reduce(corners) - cell_m, 0.0)
+        _word_costs(-math.pi + 2.0 * math.pi * k / n_yaw, coords, rho, reverse_penalty, switch_cost_m, weighted[k],
+                    shortest[k])
+    # the rest by reflection: (x, y, yaw) and (x, −y, −yaw) cost the same (left and right turns swap); the
+    # yaw sample k mirrors n_yaw − k
+    for k in range(n_yaw // 2 + 1, n_yaw + 1):
+        weighted[k] = weighted[n_yaw - k, ::-1]
+        shortest[k] = shortest[n_yaw - k, ::-1]
+    lows = [np.minimum.reduce([samples[dk:dk + n_yaw, dj:dj + 2 * n, di:di + 2 * n]
+                               for dk in (0, 1) for dj in (0, 1) for di in (0, 1)]) for samples in (weighted, shortest)]
+    # Near the goal the weighted cost jumps by a cusp's cost across thin slivers (a short word without a cusp exists
+    # only in a narrow cone), thinner than a bin, so its corners miss them: there the bin holds the distance, which
+    # the weighted cost never goes below.
+    centre = (np.arange(2 * n) - n + 0.5) * cell_m
+    near = np.hypot(centre[None, :], centre[:, None]) < NEAR_GOAL_M + cell_m
+    table = np.where(near, lows[1], lows[0])
+    # the cost is not monotone inside a bin (it dips by a few mm between corners): keep a cell of margin
+    return np.maximum(table - RS_TABLE_MARGIN_CELLS * cell_m, 0.0)
 
 
 def auto_downsample(shape: tuple[int, ...], max_cells: int = 50_000) -> int:

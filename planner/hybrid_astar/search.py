@@ -75,6 +75,7 @@ GOAL_SIDE_AFTER = 2_000  # expansions without a path before the goal side's sear
 MEET_AFTER = 10_000  # expansions of both sides before shots try to join their trees (meet.py): tails only
 FORWARD_RETRY_MIN = 20_000  # expansions a forward-only search may always take to find a cheaper path
 FORWARD_RETRY_SHARE = 0.5  # ... tried when the path found rolls more than this share of its length backwards
+FORWARD_CHECK_BUDGET = 1_000  # ... unless a forward-only search from the goal exhausts within this many (a dead end)
 CLOSED_SET_BUDGET_MB = 1024  # the closed-set bitset of one plan may not exceed this (≈ 6300² cells at defaults, tested)
 
 
@@ -109,6 +110,7 @@ class PlannerOptions:
     smooth_max_tries: int = 24        # candidate shortcut targets tried per path knot
     smooth_passes: int = 3            # shortcut passes; later passes re-subdivide the path (≈ 2 % shorter)
     prefer_forward: bool = True       # with reversing: also try a bounded forward-only search, keep the cheaper
+    weighted_rs_heuristic: bool = False  # with reversing: the Reeds–Shepp heuristic prices reversing and cusps
 
     def __post_init__(self) -> None:
         """Every option set is checked when it is made: raise :class:`InvalidInput` naming the first bad option."""
@@ -174,6 +176,20 @@ class PlannerOptions:
 
 
 Pose = tuple[float, float, float]
+
+
+def rs_table_for(robot: RobotProfile, o: PlannerOptions, clock: Clock | None = None) -> np.ndarray:
+    """The Reeds–Shepp heuristic table a reversing search with options ``o`` uses (cached per process).
+
+    By default the words' plain length (the Reeds–Shepp distance). With ``o.weighted_rs_heuristic`` their cost
+    under the search's own ``reverse_penalty`` and ``switch_cost_m``: measured on the 60 real-map problems it finds
+    paths 0.3 % shorter and 0.4 % cheaper, but a greedy search (greed 1) then floods the tight pockets where
+    the car's table asks for a cusp the sphere's sideways roll shift does not need (pockets#2: 18 k → 230 k
+    expansions), so it is not the default (docs/planning.md).
+    """
+    weights = (o.reverse_penalty, o.switch_cost_m) if o.weighted_rs_heuristic else (1.0, 0.0)
+    return reeds_shepp_table(robot.min_turning_radius_m, o.n_yaw_bins, RS_CELL_M, clock=clock,
+                             reverse_penalty=weights[0], switch_cost_m=weights[1])
 
 _compiled = False
 
@@ -318,8 +334,7 @@ class HybridAStar:
         self.goal_side_ok = goal_side_possible(self)
         o = self.options
         self.reverse = robot.reversible if o.allow_reverse is None else o.allow_reverse
-        self.rs_table = (reeds_shepp_table(robot.min_turning_radius_m, o.n_yaw_bins, RS_CELL_M) if self.reverse
-                         else np.zeros((1, 1, 1)))
+        self.rs_table = rs_table_for(robot, o) if self.reverse else np.zeros((1, 1, 1))
         self.heuristic_factor = o.heuristic_downsample or auto_downsample(grid.data.shape)
         self._heuristics: OrderedDict[tuple[int, int], HolonomicHeuristic] = OrderedDict()
         self.holonomic_mult = coarse_cost_grid(self.clearance.clearance, self.centre_threshold_m,
@@ -456,7 +471,12 @@ class HybridAStar:
             extra["goal_side_expansions"] = side.expansions
         if self.reverse and o.prefer_forward:
             bound = side.met_cost if met and side is not None else self._search_cost(found)
-            fwd, forward = self._forward_alternative(start, goal, heur, o, clock, motions, found.expansions, bound)
+            checked: list[int] = []
+            fwd, forward = self._forward_alternative(start, goal, heur, o, clock, motions, found.expansions, bound,
+                                                     checked)
+            if checked:
+                expansions += checked[0]
+                extra["forward_check_expansions"] = checked[0]
             if fwd is not None:
                 expansions += fwd.expansions
                 extra["forward_alternative_expansions"] = fwd.expansions
@@ -578,6 +598,7 @@ class HybridAStar:
     def _forward_alternative(
         self, start: Pose, goal: Pose, heur: HolonomicHeuristic, o: PlannerOptions, clock: Clock,
         motions: list[tuple[float, float, float]], expansions: int, bound: float = math.inf,
+        checked: list[int] | None = None,
     ) -> tuple[_Search | None, list[tuple[float, float, float]] | None]:
         """The forward-only search run (None when not tried) and its path when it costs less than ``motions``
         by :meth:`_travel_cost` (else None).
@@ -588,7 +609,9 @@ class HybridAStar:
         (more than FORWARD_RETRY_SHARE; backing out of a dead end is fine) and a forward path could be cheaper
         (the Dubins distance is below its cost), a forward-only search (whose Dubins heuristic does
         see the turn) gets at most max(FORWARD_RETRY_MIN, the first search's) expansions and what is left of
-        the time limit; the cheaper of the two paths is returned.
+        the time limit; the cheaper of the two paths is returned. It is not run when a forward-only search of the
+        reverse problem from the goal exhausts within FORWARD_CHECK_BUDGET expansions (no forward path reaches
+        the goal); that check's expansions are appended to ``checked``.
         """
         backwards = sum(-s for _, _, s in motions if s < 0)
         if backwards <= FORWARD_RETRY_SHARE * self._length(start, motions):
@@ -596,6 +619,9 @@ class HybridAStar:
         cost = self._travel_cost(start, motions, o)
         if dubins_distance(*start, *goal, self.robot.min_turning_radius_m) >= cost:
             return None, None
+        if self.goal_side_ok and self._reverse_search(
+                start, goal, o, clock, reverse=False, budget=FORWARD_CHECK_BUDGET, spent=checked) is not None:
+            return None, None  # the goal cannot be approached rolling forwards: no forward path exists
         run = _Search(self, start, goal, heur, o, False)
         run.p[kernels.P_BOUND] = bound
         try:
@@ -613,27 +639,34 @@ class HybridAStar:
         k, n = int(run.counters[kernels.C_RESULT]), int(run.counters[kernels.C_SHOT_SEGS])
         return float(run.node_f[k, 4]) + float(kernels._shot_cost(run.p, int(run.node_i[k, 2]), run.seg_len, n))
 
-    def _reverse_search(self, start: Pose, goal: Pose, o: PlannerOptions, clock: Clock) -> int | None:
-        """Search the reverse problem within :data:`GOAL_CHECK_BUDGET` expansions: from the goal to the start
-        with every motion run backwards. A path run backwards is rolled by the same kinematics with the
-        heading turned by π (and the roll mirrored, which maps the symmetric roll set onto itself); a
-        reversible robot's motion set is its own reverse. Returns the number of states from which the goal
-        can be reached when that search exhausts them all (so the start is not among them), else None (also
-        when ``clock`` runs out)."""
-        flip = 0.0 if self.reverse else math.pi
+    def _reverse_search(self, start: Pose, goal: Pose, o: PlannerOptions, clock: Clock, reverse: bool | None = None,
+                        budget: int = GOAL_CHECK_BUDGET, spent: list[int] | None = None) -> int | None:
+        """Search the reverse problem within ``budget`` expansions: from the goal to the start with every motion
+        run backwards. A path run backwards is rolled by the same kinematics with the heading turned by π (and the
+        roll mirrored, which maps the symmetric roll set onto itself); a reversible robot's motion set is its own
+        reverse, a forward-only one's is forward-only with the heading turned by π. ``reverse`` (default the
+        planner's) says which motions the path may use. Returns the number of states from which the goal can be
+        reached when that search exhausts them all (so the start is not among them), else None (also when
+        ``clock`` runs out). Its expansions are appended to ``spent`` when given."""
+        reverse = self.reverse if reverse is None else reverse
+        flip = 0.0 if reverse else math.pi
         back_start = (goal[0], goal[1], wrap(goal[2] + flip))
         back_goal = (start[0], start[1], wrap(start[2] + flip))
         if self.footprint_margin(back_start) < 0:
             return None
         heur = self.holonomic(back_goal[:2], back_start[:2])
-        run = _Search(self, back_start, back_goal, heur, o, self.reverse)
-        while run.expansions < GOAL_CHECK_BUDGET and not clock.expired():
-            status = run.step(min(self.chunk_expansions(o), GOAL_CHECK_BUDGET - run.expansions))
+        run = _Search(self, back_start, back_goal, heur, o, reverse)
+        exhausted = None
+        while run.expansions < budget and not clock.expired():
+            status = run.step(min(self.chunk_expansions(o), budget - run.expansions))
             if status == kernels.EXHAUSTED:
-                return run.expansions
+                exhausted = run.expansions
+                break
             if status == kernels.FOUND:
-                return None
-        return None
+                break
+        if spent is not None:
+            spent.append(run.expansions)
+        return exhausted
 
     def _knots(self, start: Pose, motions: list[tuple[float, float, float]], roll: float = 0.0) -> np.ndarray:
         """Pose (x, y, yaw, roll) and distance travelled at the start and after every motion: (n+1, 5)."""

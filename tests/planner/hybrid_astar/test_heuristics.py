@@ -3,6 +3,7 @@
 import math
 
 import numpy as np
+import pytest
 from scipy.spatial import ConvexHull
 
 from planner.hybrid_astar.heuristics import HolonomicHeuristic
@@ -120,6 +121,51 @@ def test_reeds_shepp_table_never_exceeds_ompl():
     assert np.mean(gaps) < 0.25
 
 
+def test_weighted_reeds_shepp_table_never_exceeds_the_cheapest_weighted_word():
+    """With the search's reverse and cusp weights each bin holds at most the cheapest word's weighted cost
+    (:func:`rs_best`) anywhere inside it, and it is above the plain distance where reversing or a cusp is needed."""
+    from planner.hybrid_astar.heuristics import reeds_shepp_table
+    from planner.hybrid_astar.reeds_shepp import rs_best
+
+    rho, n_yaw, cell, rp, sc = 1.12, 72, 0.1, 1.2, 1.0
+    table = reeds_shepp_table(rho, n_yaw, cell, reverse_penalty=rp, switch_cost_m=sc)
+    plain = reeds_shepp_table(rho, n_yaw, cell)
+    assert table.shape == plain.shape
+    assert np.all(table >= plain - 1e-9)  # every weight is ≥ 1: never below the distance
+    n = table.shape[2] // 2
+    seg_turn, seg_len = np.zeros(6), np.zeros(6)
+    rng = np.random.default_rng(5)
+    gaps = []
+    for x, y, yaw in zip(rng.uniform(-n * cell, n * cell, 20000), rng.uniform(-n * cell, n * cell, 20000),
+                         rng.uniform(-math.pi, math.pi, 20000), strict=True):
+        i, j = math.floor(x / cell + n), math.floor(y / cell + n)
+        k = min(math.floor((yaw + math.pi) / (2 * math.pi) * n_yaw), n_yaw - 1)
+        _, cost = rs_best(x, y, yaw, 0.0, 0.0, 0.0, rho, rp, sc, seg_turn, seg_len)
+        gaps.append(cost - table[k, j, i])
+    assert min(gaps) >= -1e-9
+    assert np.mean(gaps) < 0.35
+    # 2 m straight ahead of the goal, same heading: reversing costs 1.2 × 2 m, turning round far more
+    i, j, k = round(2.0 / cell + n), n, n_yaw // 2
+    assert table[k, j, i] == pytest.approx(rp * 2.0, abs=2.5 * cell)
+    assert plain[k, j, i] == pytest.approx(2.0, abs=2.5 * cell)
+
+
+def test_reeds_shepp_table_is_mirror_symmetric():
+    """The build computes half the yaw samples and mirrors the rest ((x, y, yaw) ↔ (x, −y, −yaw)): the mirrored
+    half must equal what the words give there."""
+    from planner.hybrid_astar.heuristics import _word_costs
+
+    rho, n_yaw = 1.12, 72
+    coords = (np.arange(11) - 5) * 0.3
+    for k in (5, 20, 33):
+        yaw = -math.pi + 2 * math.pi * k / n_yaw
+        a, b = np.empty((11, 11)), np.empty((11, 11))
+        c, d = np.empty((11, 11)), np.empty((11, 11))
+        _word_costs(yaw, coords, rho, 1.2, 1.0, a, b)
+        _word_costs(-yaw, coords, rho, 1.2, 1.0, c, d)
+        assert np.allclose(a, c[::-1], atol=1e-9) and np.allclose(b, d[::-1], atol=1e-9)
+
+
 def test_reverse_search_uses_reeds_shepp_and_stays_valid():
     from tests.pathcheck import check_path
 
@@ -149,3 +195,18 @@ def test_holonomic_tables_are_cached_per_goal_and_replaced_when_the_start_is_bey
     assert far is not near and far(1.0, 5.0) < far.cutoff
     assert far(1.0, 5.0) > near(1.0, 5.0)  # better informed there, and still a lower bound of the true cost
     assert far(1.0, 5.0) <= 17.0
+
+
+def test_the_weighted_table_is_used_only_when_asked():
+    from planner.hybrid_astar.heuristics import reeds_shepp_table
+
+    occ = np.zeros((60, 60), bool)
+    grid = OccupancyGrid.from_occupied(occ, 0.05)
+    robot = load_robot()
+    rho = robot.min_turning_radius_m
+    plain = HybridAStar(grid, robot, PlannerOptions(allow_reverse=True))
+    weighted = HybridAStar(grid, robot, PlannerOptions(allow_reverse=True, weighted_rs_heuristic=True,
+                                                       reverse_penalty=1.5, switch_cost_m=2.0))
+    assert plain.rs_table is reeds_shepp_table(rho, 72, 0.1)
+    assert weighted.rs_table is reeds_shepp_table(rho, 72, 0.1, reverse_penalty=1.5, switch_cost_m=2.0)
+    assert weighted.rs_table.max() > plain.rs_table.max()

@@ -111,3 +111,29 @@ def test_a_path_that_must_back_out_is_left_alone() -> None:
     back = _backwards_m(result.states)
     assert 0.0 < back < 0.5 * result.length_m
     assert "forward_alternative_expansions" not in result.extra
+
+
+def test_a_goal_that_cannot_be_approached_forwards_skips_the_forward_search() -> None:
+    """pockets#8 of the real-map bench: the path rolls mostly backwards and a forward path could be cheaper by the
+    Dubins bound, but the goal sits in a pocket that a forward-only search from the goal exhausts in a few states:
+    no forward path exists, so the 20 000-expansion forward search is not run (it was, before)."""
+    from planner.hybrid_astar.dubins import dubins_distance
+    from planner.hybrid_astar.search import FORWARD_CHECK_BUDGET
+    from planner.termination import Termination
+
+    grid = load_map("maps/real/pockets.yaml")
+    start, goal = (26.875, 14.625, -2.1864988338850018), (4.825, 17.325, -1.1774962766354187)
+    o = PlannerOptions()
+    planner = HybridAStar(grid, ROBOT, o)
+    result = planner.plan(start, goal)
+    assert check_path(grid, ROBOT, result.states, start, goal) == []
+    assert _backwards_m(result.states) > 0.5 * result.length_m  # the forward alternative's trigger ...
+    assert dubins_distance(*start, *goal, ROBOT.min_turning_radius_m) < _cost(result.states, o)  # ... both parts
+    exhausted = planner._reverse_search(start, goal, o, Termination(10).start(), reverse=False,
+                                        budget=FORWARD_CHECK_BUDGET)
+    assert exhausted is not None and exhausted < 100
+    assert "forward_alternative_expansions" not in result.extra
+    assert result.extra["forward_check_expansions"] == exhausted  # counted in the result's expansions
+    # the garage's goal can be approached forwards: there the forward search still runs and wins (test above)
+    assert HybridAStar(load_map("maps/garage.yaml"), ROBOT, o)._reverse_search(
+        START, GOAL, o, Termination(10).start(), reverse=False, budget=FORWARD_CHECK_BUDGET) is None
