@@ -47,7 +47,8 @@ GREEDS = (0.5, 0.25, 0.0)  # the re-searches' greed, falling (ARA*); only those 
 DENSE_TRIES = 2  # the dense smoothing tries this many times the options' smooth_max_tries targets per knot
 DENSE_PASSES = 6  # ... in at most this many passes
 DENSE_PASSES_RESERVED = 2  # the re-searches leave the time of this many dense passes before the deadline
-DENSE_PASS_FACTOR = 1.0  # one dense pass ≈ this × the first path's whole smoothing (measured: 0.5–1.5)
+DENSE_PASS_FACTOR = 2.0  # one dense pass ≈ this × the first path's whole smoothing (measured 0.4–20×: a guess)
+DENSE_PASS_MIN_S = 0.01  # ... and at least this
 MAX_IMPROVE_S = 3600.0  # the largest improve_until_s accepted (an hour: a plan is never meant to take longer)
 
 
@@ -65,7 +66,8 @@ class Improver:
         self.until = Clock(clock.termination, clock.t0, min(clock.deadline, clock.t0 + o.improve_until_s))
         # time kept for the dense smoothing at the end: DENSE_PASSES_RESERVED passes, each estimated from the first
         # path's smoothing (a few passes on half as many knots with fewer targets each)
-        self.reserve = DENSE_PASSES_RESERVED * DENSE_PASS_FACTOR * smooth_s if o.smooth else 0.0
+        self.reserve = (DENSE_PASSES_RESERVED * max(DENSE_PASS_MIN_S, DENSE_PASS_FACTOR * smooth_s) if o.smooth
+                        else 0.0)
         self.motions = motions
         self.cost = planner._travel_cost(start, motions, o)
         self.bound = bound  # the search cost (g) of the cheapest path the search has found
