@@ -4,6 +4,7 @@ are on lengths, costs and the record's structure."""
 
 from __future__ import annotations
 
+import itertools
 import json
 import math
 import time
@@ -66,7 +67,7 @@ def test_the_record_starts_with_the_first_path_and_only_gets_cheaper(first, impr
     assert rounds[0]["length_m"] == pytest.approx(first.length_m, abs=2e-3)
     assert len(rounds) >= 2
     costs = [r["cost"] for r in rounds]
-    assert all(b < a for a, b in zip(costs, costs[1:], strict=False))
+    assert all(b < a for a, b in itertools.pairwise(costs))
     times = [r["t_s"] for r in rounds]
     assert times == sorted(times) and times[-1] <= improved.planning_time_s
     assert {r["by"] for r in rounds[1:]} <= {f"greed {g:g}" for g in GREEDS} | {"smoothing"}
