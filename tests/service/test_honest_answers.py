@@ -296,6 +296,7 @@ def test_one_improvement_budget_one_improved_path_at_every_door(client: httpx.Cl
                          *map(str, harness.HALL_START), "--goal", *map(str, harness.HALL_GOAL), "--time-limit", "3",
                          "--options", json.dumps(options))
     assert code == 0, err
+    assert "improved from" in err and "(rounds stopped: admissible search finished)" in err  # the summary says it
     answers = [http, reply["payload"], json.loads(out)]
     for answer in answers:
         rounds = answer["improvements"]
