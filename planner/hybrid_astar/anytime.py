@@ -1,29 +1,35 @@
-"""Anytime planning (issue 21, item 6): after the first path, shorter ones while the caller's time budget lasts.
+"""Anytime planning (issue 21, item 6): after the first path, cheaper ones while the caller's time budget lasts.
 
 With ``PlannerOptions.improve_until_s`` > 0, :meth:`HybridAStar.plan` hands its first path (already smoothed, and
 the forward-only alternative already weighed) to :func:`improve`, which runs improvement rounds until
 ``improve_until_s`` seconds from the start of the plan — or the request's own time limit, when that comes first:
 
-1. **smoothing**: the best path shortcut again with denser knots (every half search step) and four times the
-   candidate targets per knot, passes repeated while they gain a millimetre;
-2. **greed g** for g in :data:`GREEDS` below the options' ``greed``: a new search (the cached holonomic table of
-   the first) with f = g + (1 + g)·h — ARA*'s schedule of falling weights — pruned by the search cost of the best
-   path known (``kernels.P_BOUND``: a child whose g + h exceeds it is dropped, h never exceeding the cost-to-go),
-   its path smoothed (the usual smoothing, then the dense one) and kept when it is cheaper.
+1. **greed g** for g in :data:`GREEDS` (0.5, 0.25, 0) below the options' ``greed``: a new search (the cached
+   holonomic table of the first) with f = g + (1 + g)·h — ARA*'s schedule of falling weights, each search started
+   afresh — pruned by the search cost of the cheapest path found so far (``kernels.P_BOUND``: a child whose
+   g + h exceeds it is dropped, h never exceeding the cost-to-go); its path is smoothed as usual and kept when it
+   is cheaper. The searches stop early enough to leave the last round its time;
+2. **smoothing**: the best path shortcut again in up to DENSE_PASSES passes with DENSE_TRIES × the candidate
+   targets per knot (on knots every search step, as the usual later passes), a pass started only when the last
+   one's time (the first: estimated from the first path's smoothing) still fits before the deadline.
+
+Measured on the real-map bench (docs/planning.md): the greed rounds give most of the gain, (0.5, 0.25, 0) a little
+more than (0.25, 0), (0.5, 0), (0.75, 0.5, 0.25, 0) or the dense smoothing alone.
 
 "Cheaper" is :meth:`HybridAStar._travel_cost`, the measure by which the planner already chooses between its
 reversing path and its forward alternative: the length with the reverse metres weighted by ``reverse_penalty`` and
-``switch_cost_m`` per cusp. A candidate is kept only when it also passes the same exact footprint check as the final
-path, so an improvement round can never turn a plan into a failure; the first path is never replaced by a dearer
-one.
+``switch_cost_m`` per cusp (for a path that never reverses: its length). A candidate is kept only when it also
+passes the same exact footprint check as the final path, so an improvement round can never turn a plan into a
+failure, and the first path is never replaced by a dearer one.
 
-A round that runs out of time ends the improvement: the best path so far is the answer (not an error). A cancel
-is still a cancel (:class:`~planner.errors.PlannerCancelled` goes up). The result's ``extra["improvements"]`` lists
-the first path and every path kept (time since the start of the plan, length, cost, what produced it),
-``extra["improvement_stop"]`` says why the rounds stopped: ``"deadline"`` (``improve_until_s`` reached),
-``"time limit"`` (the request's limit came first), ``"admissible search finished"`` (the greed-0 search ended:
-no cheaper path is left for the search to find) or ``"rounds done"`` (every round ran, the last one not
-admissible).
+A round that runs out of time ends the improvement: the best path so far is the answer (not an error); a search
+is stopped between compiled chunks, a smoothing pass once started finishes (as the first path's smoothing does).
+A cancel is still a cancel (:class:`~planner.errors.PlannerCancelled` goes up). The result's
+``extra["improvements"]`` lists the first path and every path kept (``t_s`` since the start of the plan,
+``length_m``, ``cost``, ``by``: what produced it), ``extra["improvement_stop"]`` says why the rounds stopped:
+``"deadline"`` (``improve_until_s`` reached), ``"time limit"`` (the request's limit came first),
+``"admissible search finished"`` (the greed-0 search ended, found or exhausted below the bound: the search has no
+cheaper path left to find; then the last smoothing still runs) or ``"rounds done"``.
 """
 
 from __future__ import annotations
@@ -47,7 +53,7 @@ GREEDS = (0.5, 0.25, 0.0)  # the re-searches' greed, falling (ARA*); only those 
 DENSE_TRIES = 2  # the dense smoothing tries this many times the options' smooth_max_tries targets per knot
 DENSE_PASSES = 6  # ... in at most this many passes
 DENSE_PASSES_RESERVED = 2  # the re-searches leave the time of this many dense passes before the deadline
-DENSE_PASS_FACTOR = 2.0  # one dense pass ≈ this × the first path's whole smoothing (measured 0.4–20×: a guess)
+DENSE_PASS_FACTOR = 2.0  # one dense pass ≈ this × the first path's whole smoothing (measured 0.5–2.5×, 23 problems)
 DENSE_PASS_MIN_S = 0.01  # ... and at least this
 MAX_IMPROVE_S = 3600.0  # the largest improve_until_s accepted (an hour: a plan is never meant to take longer)
 
@@ -118,7 +124,7 @@ class Improver:
         return bool(pl.clearance.footprint_margins(pl.footprint, pl.polygon, fine[:, :3]).min() >= 0)
 
     def dense_smooth(self, motions: list[Motion], p: Any) -> list[Motion]:
-        """Shortcut passes on knots every half search step with DENSE_TRIES × the targets per knot, while a pass
+        """Shortcut passes on knots every search step with DENSE_TRIES × the targets per knot, while a pass
         shortens the path by more than a millimetre and the last pass's time still fits before the deadline (a
         compiled pass cannot be stopped half-way)."""
         pl, o = self.planner, self.o
@@ -129,7 +135,7 @@ class Improver:
             if self.until.remaining_s() < took:
                 break
             t = time.perf_counter()
-            candidate = pl._shortcut(self.start, subdivide(motions, 0.5 * pl.resolved_step_m), p, tries)
+            candidate = pl._shortcut(self.start, subdivide(motions, pl.resolved_step_m), p, tries)
             took = time.perf_counter() - t
             new_length = pl._length(self.start, candidate)
             if new_length > length - 1e-3:
