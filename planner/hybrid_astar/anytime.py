@@ -22,7 +22,8 @@ reversing path and its forward alternative: the length with the reverse metres w
 passes the same exact footprint check as the final path, so an improvement round can never turn a plan into a
 failure, and the first path is never replaced by a dearer one.
 
-A round that runs out of time ends the improvement: the best path so far is the answer (not an error); a search
+A round that runs out of time ends the improvement: the best path so far is the answer (not an error; when the
+request's limit comes first the rounds end FINISH_SHARE of it early, leaving the final checks their time); a search
 is stopped between compiled chunks, a smoothing pass once started finishes (as the first path's smoothing does).
 A cancel is still a cancel (:class:`~planner.errors.PlannerCancelled` goes up). The result's
 ``extra["improvements"]`` lists the first path and every path kept (``t_s`` since the start of the plan,
@@ -55,6 +56,7 @@ DENSE_PASSES = 6  # ... in at most this many passes
 DENSE_PASSES_RESERVED = 2  # the re-searches leave the time of this many dense passes before the deadline
 DENSE_PASS_FACTOR = 2.0  # one dense pass ≈ this × the first path's whole smoothing (measured 0.5–2.5×, 23 problems)
 DENSE_PASS_MIN_S = 0.01  # ... and at least this
+FINISH_SHARE = 0.1  # the rounds leave this share of the request's time limit for the final checks when it binds
 MAX_IMPROVE_S = 3600.0  # the largest improve_until_s accepted (an hour: a plan is never meant to take longer)
 
 
@@ -68,10 +70,14 @@ class Improver:
         self.goal = goal
         self.o = o
         self.clock = clock
-        # the improvement clock: improve_until_s from the plan's start, never past the request's own deadline
-        self.until = Clock(clock.termination, clock.t0, min(clock.deadline, clock.t0 + o.improve_until_s))
+        # the improvement clock: improve_until_s from the plan's start; when the request's own limit comes first, the
+        # rounds end FINISH_SHARE of it before, so the final checks (and a door's, which count the whole plan against
+        # the limit) still fit and the best path is an answer, not a timeout
+        finish_by = clock.deadline - FINISH_SHARE * clock.time_limit_s
+        self.limit_binds = clock.t0 + o.improve_until_s >= finish_by
+        self.until = Clock(clock.termination, clock.t0, finish_by if self.limit_binds else clock.t0 + o.improve_until_s)
         # time kept for the dense smoothing at the end: DENSE_PASSES_RESERVED passes, each estimated from the first
-        # path's smoothing (a few passes on half as many knots with fewer targets each)
+        # path's whole smoothing (up to smooth_passes passes with half the targets per knot of a dense pass)
         self.reserve = (DENSE_PASSES_RESERVED * max(DENSE_PASS_MIN_S, DENSE_PASS_FACTOR * smooth_s) if o.smooth
                         else 0.0)
         self.motions = motions
@@ -96,7 +102,7 @@ class Improver:
     def binding(self) -> str:
         """Which limit ends the improvement: ``"time limit"`` when the request's own limit comes no later than
         ``improve_until_s``, else ``"deadline"``."""
-        return "time limit" if self.until.deadline >= self.clock.deadline else "deadline"
+        return "time limit" if self.limit_binds else "deadline"
 
     def offer(self, motions: list[Motion], by: str, analytic: int | None = None) -> bool:
         """Keep ``motions`` (with the analytic segments of the search that found them, None: the same search)
@@ -165,7 +171,8 @@ class Improver:
             return None, run, run.expansions < self.clock.termination.max_iterations
         self.expansions += run.expansions
         self.bound = min(self.bound, pl._search_cost(run))
-        return pl._motions(run), run, True
+        # (out of time with a held-back shot, _drive returns that shot: a path, but not the search's end)
+        return pl._motions(run), run, not until.expired()
 
 
 def subdivide(motions: list[Motion], step: float) -> list[Motion]:

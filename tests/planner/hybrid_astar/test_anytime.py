@@ -161,3 +161,15 @@ def test_subdivide_keeps_the_motions() -> None:
     assert len(pieces) == 4 + 1 + 1
     assert sum(s for _, _, s in pieces) == pytest.approx(sum(s for _, _, s in motions))
     assert all(abs(s) <= 0.3 + 1e-12 for _, _, s in pieces)
+
+
+def test_a_budget_shares_the_preprocessed_planner(grid) -> None:
+    """planner_for: improve_until_s does not change the map's preprocessing, so the cached planner is shared."""
+    from planner.hybrid_astar.plan import planner_for
+
+    robot = load_robot()
+    plain = planner_for(grid, robot, PlannerOptions())
+    budgeted = planner_for(grid, robot, PlannerOptions(improve_until_s=1.5))
+    assert budgeted.clearance is plain.clearance and budgeted.holonomic_mult is plain.holonomic_mult
+    assert budgeted.options.improve_until_s == 1.5 and plain.options.improve_until_s == 0.0
+    assert planner_for(grid, robot, PlannerOptions()) is plain
