@@ -37,6 +37,7 @@ from __future__ import annotations
 
 import math
 import time
+from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
 from planner.errors import PlannerCancelled, PlannerTimedOut, PlanningError
@@ -45,8 +46,11 @@ from planner.termination import Clock
 
 if TYPE_CHECKING:
     from planner.hybrid_astar.heuristics import HolonomicHeuristic
-    from planner.hybrid_astar.search import HybridAStar, PlannerOptions
 
+# (search.py's HybridAStar, _Search and PlannerOptions are typed Any here: this module may not import search.py,
+# which imports it; two_ended.py does the same)
+HybridAStar = Any
+PlannerOptions = Any
 Pose = tuple[float, float, float]
 Motion = tuple[float, float, float]
 
@@ -64,8 +68,9 @@ class Improver:
     """The best path so far and the record of how it improved (one plan's improvement rounds)."""
 
     def __init__(self, planner: HybridAStar, start: Pose, goal: Pose, o: PlannerOptions, clock: Clock,
-                 motions: list[Motion], bound: float, smooth_s: float = 0.0) -> None:
+                 motions: list[Motion], bound: float, smooth_s: float, new_search: Callable[..., Any]) -> None:
         self.planner = planner
+        self.new_search = new_search  # search.py's _Search(planner, start, goal, heuristic, options, reverse)
         self.start = start
         self.goal = goal
         self.o = o
@@ -153,10 +158,8 @@ class Improver:
         """One search with ``greed``, pruned by :attr:`bound`, until ``until``: its path (None when none was found),
         the search and whether it ran to its end (found or exhausted, not stopped by the clock or the iteration
         cap)."""
-        from planner.hybrid_astar.search import _Search
-
         pl, o = self.planner, self.o
-        run = _Search(pl, self.start, self.goal, heur, o, pl.reverse)
+        run = self.new_search(pl, self.start, self.goal, heur, o, pl.reverse)
         run.p[kernels.P_GREED] = greed
         run.p[kernels.P_BOUND] = self.bound
         try:
@@ -185,13 +188,14 @@ def subdivide(motions: list[Motion], step: float) -> list[Motion]:
 
 
 def improve(planner: HybridAStar, start: Pose, goal: Pose, heur: HolonomicHeuristic, o: PlannerOptions,
-            clock: Clock, motions: list[Motion], bound: float, p: Any, smooth_s: float) -> Improver:
+            clock: Clock, motions: list[Motion], bound: float, p: Any, smooth_s: float,
+            new_search: Callable[..., Any]) -> Improver:
     """Improvement rounds on the first path ``motions`` (whose search cost is ``bound``) until ``o.improve_until_s``
     or the request's deadline; the returned :class:`Improver` holds the best path (``motions``), the rounds kept
     (``rounds``), why they stopped (``stop``) and the expansions they ran. ``p`` is the first search's parameter
     array (the smoothing's clearance and footprint settings), ``smooth_s`` the time the first path's smoothing
-    took (the dense smoothing's time is reserved from it)."""
-    imp = Improver(planner, start, goal, o, clock, motions, bound, smooth_s)
+    took (the dense smoothing's time is reserved from it), ``new_search`` search.py's ``_Search``."""
+    imp = Improver(planner, start, goal, o, clock, motions, bound, smooth_s, new_search)
     # the re-searches stop early enough to leave the dense smoothing of the best path its time
     searches = Clock(clock.termination, clock.t0, imp.until.deadline - imp.reserve)
     stop = None

@@ -465,7 +465,7 @@ class HybridAStar:
                 bound = min(bound, self._search_cost(fwd))
         if o.improve_until_s > 0:
             # anytime (anytime.py): cheaper paths until improve_until_s, the request's own limit still first
-            better = improve(self, start, goal, heur, o, clock, motions, bound, run.p, t_smooth)
+            better = improve(self, start, goal, heur, o, clock, motions, bound, run.p, t_smooth, _Search)
             extra.update(better.extra())
             expansions += better.expansions
             motions = better.motions
