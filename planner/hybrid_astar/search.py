@@ -471,7 +471,7 @@ class HybridAStar:
             motions = better.motions
             if better.analytic is not None:  # the path kept came from a re-search with reversing as configured
                 analytic = better.analytic
-                extra["forward_alternative"] = False
+                extra.pop("forward_alternative", None)
         poses = self._densify(start, motions, o.state_spacing_m)
         fine = self._densify(start, motions, self.grid.resolution_m / 4)
         margins = self.clearance.footprint_margins(self.footprint, self.polygon, fine[:, :3])
