@@ -8,7 +8,9 @@ Planners are cached per (map, robot, options) so repeated queries skip the dista
 
 from __future__ import annotations
 
+import copy
 from collections import OrderedDict
+from dataclasses import replace
 from functools import lru_cache
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -28,8 +30,16 @@ _CACHE_SIZE = 8
 
 
 def planner_for(grid: OccupancyGrid, robot: RobotProfile, options: PlannerOptions | None = None) -> HybridAStar:
-    """A (cached) :class:`HybridAStar` for this grid object, robot and options."""
+    """A (cached) :class:`HybridAStar` for this grid object, robot and options.
+
+    ``improve_until_s`` only says how long a plan may look for cheaper paths: planners that differ in it alone share
+    one preprocessed planner (a shallow copy carries the asked value), so a client that varies its budget per
+    request does not pay the map's preprocessing again."""
     opts = options or PlannerOptions()
+    if opts.improve_until_s:
+        shared = copy.copy(planner_for(grid, robot, replace(opts, improve_until_s=0.0)))
+        shared.options = opts
+        return shared
     key = (id(grid), robot.name, opts)
     planner = _CACHE.get(key)
     if planner is None or planner.grid is not grid or planner.robot != robot:

@@ -50,6 +50,7 @@ from planner.errors import (
     StartOutsideMap,
 )
 from planner.hybrid_astar import kernels, meet
+from planner.hybrid_astar.anytime import MAX_IMPROVE_S, improve
 from planner.hybrid_astar.dubins import dubins_distance
 from planner.hybrid_astar.heuristics import HolonomicHeuristic, auto_downsample, coarse_cost_grid, reeds_shepp_table
 from planner.hybrid_astar.two_ended import GoalSide, goal_side_possible
@@ -111,6 +112,7 @@ class PlannerOptions:
     smooth_passes: int = 3            # shortcut passes; later passes re-subdivide the path (≈ 2 % shorter)
     prefer_forward: bool = True       # with reversing: also try a bounded forward-only search, keep the cheaper
     weighted_rs_heuristic: bool = False  # with reversing: the Reeds–Shepp heuristic prices reversing and cusps
+    improve_until_s: float = 0.0      # anytime: look for cheaper paths until this many s from the start (0 = off)
 
     def __post_init__(self) -> None:
         """Every option set is checked when it is made: raise :class:`InvalidInput` naming the first bad option."""
@@ -141,6 +143,8 @@ class PlannerOptions:
         need(0 < self.state_spacing_m <= 0.05, "state_spacing_m", "must be in (0, 0.05]")
         need(1 <= self.smooth_max_tries <= 1000, "smooth_max_tries", "must be in [1, 1000]")
         need(1 <= self.smooth_passes <= 20, "smooth_passes", "must be in [1, 20]")
+        need(0 <= self.improve_until_s <= MAX_IMPROVE_S, "improve_until_s",
+             f"must be in [0, {MAX_IMPROVE_S:g}] s from the start of the plan (0 = return the first path)")
 
     @classmethod
     def from_dict(cls, data: Mapping[str, Any]) -> PlannerOptions:
@@ -469,8 +473,8 @@ class HybridAStar:
         if side is not None:
             expansions += side.expansions
             extra["goal_side_expansions"] = side.expansions
+        bound = side.met_cost if met and side is not None else self._search_cost(found)
         if self.reverse and o.prefer_forward:
-            bound = side.met_cost if met and side is not None else self._search_cost(found)
             checked: list[int] = []
             fwd, forward = self._forward_alternative(start, goal, heur, o, clock, motions, found.expansions, bound,
                                                      checked)
@@ -484,6 +488,16 @@ class HybridAStar:
                 motions = forward
                 analytic = int(fwd.counters[kernels.C_SHOT_SEGS])
                 extra["forward_alternative"] = True
+                bound = min(bound, self._search_cost(fwd))
+        if o.improve_until_s > 0:
+            # anytime (anytime.py): cheaper paths until improve_until_s, the request's own limit still first
+            better = improve(self, start, goal, heur, o, clock, motions, bound, run.p, t_smooth, _Search)
+            extra.update(better.extra())
+            expansions += better.expansions
+            motions = better.motions
+            if better.analytic is not None:  # the path kept came from a re-search with reversing as configured
+                analytic = better.analytic
+                extra.pop("forward_alternative", None)
         poses = self._densify(start, motions, o.state_spacing_m)
         fine = self._densify(start, motions, self.grid.resolution_m / 4)
         margins = self.clearance.footprint_margins(self.footprint, self.polygon, fine[:, :3])

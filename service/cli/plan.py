@@ -129,6 +129,10 @@ def run(args: argparse.Namespace) -> int:
     went = f"wrote {args.out}" if args.out else "printed the JSON"
     extra = result.extra
     backwards = f", {extra['reverse_length_m']:.2f} m of it backwards" if extra.get("reverse_states") else ""
-    say("plan", f"{result.length_m:.2f} m{backwards} in {result.planning_time_s * 1000:.0f} ms "
+    rounds = extra.get("improvements")
+    improved = "" if not rounds else (
+        f", improved from {rounds[0]['length_m']:.2f} m by {', '.join(r['by'] for r in rounds[1:])}" if len(rounds) > 1
+        else ", no path cheaper than the first found") + f" (rounds stopped: {extra['improvement_stop']})"
+    say("plan", f"{result.length_m:.2f} m{backwards}{improved} in {result.planning_time_s * 1000:.0f} ms "
                 f"({extra['search']} search), {went}{' and ' + args.plot if args.plot else ''}")
     return EXIT_OK

@@ -271,6 +271,53 @@ def test_one_unreachable_goal_one_refusal_at_every_door(client: httpx.Client, se
     assert [a.get("expansions") for a in answers] == [0, 0, 0]
 
 
+def _without_times(answer: dict[str, Any]) -> dict[str, Any]:
+    """A plan answer without its wall-clock timings, the improvement record's included."""
+    out = harness.strip_timing(answer)
+    out["improvements"] = [{k: v for k, v in r.items() if k != "t_s"} for r in answer["improvements"]]
+    return out
+
+
+def test_one_improvement_budget_one_improved_path_at_every_door(client: httpx.Client, server: Server,
+                                                                capsys: pytest.CaptureFixture[str]) -> None:
+    """Issue 21 item 6: ``options.improve_until_s`` travels in the request's options at every door and gives the
+    same improved path (the hall's rounds end by themselves in ≈ 0.2 s, the admissible search finding nothing
+    cheaper, well before the budget, so the answer does not depend on the machine's speed; should a very busy
+    machine stop them at the test server's 3 s limit, the answers keep their structure and are no longer than the
+    first path); bad values are refused by name."""
+    options = {"improve_until_s": 3}
+    body = harness.plan_body(time_limit_s=3, options=options)
+    response = client.post("/v1/plan", json=body)
+    assert response.status_code == 200, response.text[:300]
+    http = response.json()
+    reply = zenoh_reply(server, "sphereplan/plan", body)
+    assert reply["ok"] is True, reply
+    code, out, err = run(capsys, "plan", "--map", str(server.maps_dir / "hall.yaml"), "--start",
+                         *map(str, harness.HALL_START), "--goal", *map(str, harness.HALL_GOAL), "--time-limit", "3",
+                         "--options", json.dumps(options))
+    assert code == 0, err
+    assert "improved from" in err and "(rounds stopped: admissible search finished)" in err  # the summary says it
+    answers = [http, reply["payload"], json.loads(out)]
+    for answer in answers:
+        rounds = answer["improvements"]
+        assert rounds[0]["by"] == "first path" and len(rounds) >= 2
+        assert answer["length_m"] == pytest.approx(rounds[-1]["length_m"], abs=2e-3)
+        assert answer["length_m"] < rounds[0]["length_m"]
+        assert answer["improvement_stop"] in ("admissible search finished", "time limit")
+    if all(a["improvement_stop"] == "admissible search finished" for a in answers):
+        assert _without_times(http) == _without_times(reply["payload"]) == _without_times(answers[2])
+    for bad in (-1, "x"):
+        bad_body = harness.plan_body(options={"improve_until_s": bad})
+        response = client.post("/v1/plan", json=bad_body)
+        assert 400 <= response.status_code < 500 and response.json()["field"] == "options.improve_until_s"
+        reply = zenoh_reply(server, "sphereplan/plan", bad_body)
+        assert reply["ok"] is False and reply["payload"]["field"] == "options.improve_until_s", reply
+        code, out, err = run(capsys, "plan", "--map", str(server.maps_dir / "hall.yaml"), "--start",
+                             *map(str, harness.HALL_START), "--goal", *map(str, harness.HALL_GOAL),
+                             "--options", json.dumps({"improve_until_s": bad}))
+        assert code == 2 and "options.improve_until_s" in err and "Traceback" not in err
+
+
 # ------------------------------------------------------------------------------------ 4. resolution, encodings
 
 

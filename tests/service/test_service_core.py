@@ -190,3 +190,23 @@ def test_map_png_is_north_up_with_map_server_shades() -> None:
     with Image.open(io.BytesIO(png)) as image:
         assert image.mode == "L" and image.size == (2, 2)
         assert np.asarray(image).tolist() == [[205, 127], [254, 0]]
+
+
+def test_a_budget_past_the_time_limit_answers_with_the_best_path() -> None:
+    """Issue 21 item 6: the doors count the whole plan against its time limit (service/pipeline.py); with
+    improve_until_s past the limit the improvement rounds end early enough that the best path is the answer, not a
+    timeout. (The two-walls problem's greed-0 search does not end within seconds, so the limit is what stops it.)"""
+    import math
+
+    from planner.hybrid_astar.search import PlannerOptions
+    from planner.robot import load_robot
+    from planner.termination import Termination
+    from service.pipeline import PlanQuery, execute_plan
+    from tests.planner.hybrid_astar.test_search import two_walls
+
+    query = PlanQuery((2.0, 2.0, 0.0), (18.0, 18.0, math.pi / 2), PlannerOptions(improve_until_s=600.0),
+                      Termination(1.0))
+    result = execute_plan(query, two_walls(), load_robot())
+    assert result.extra["improvement_stop"] == "time limit"
+    assert result.planning_time_s < 1.0
+    assert len(result.extra["improvements"]) >= 2  # the greed 0.5 round's path (≈ 30 ms) beat the first one
