@@ -116,6 +116,8 @@ def test_live_options_default_and_yield_to_given_ones() -> None:
     session = LiveSession(LiveMap(corridor()), ROBOT)
     assert session.options.allow_unknown is True
     assert session.options.greed == LIVE_OPTION_DEFAULTS["greed"] != PlannerOptions().greed
+    # one step per expansion live (long steps made two explore worlds collide), long steps one-off
+    assert session.options.open_step_factor == 1 < PlannerOptions().open_step_factor
     given = live_options({"allow_unknown": False, "n_rolls": 9})
     assert (given.allow_unknown, given.n_rolls, given.greed) == (False, 9, LIVE_OPTION_DEFAULTS["greed"])
     assert live_options({"greed": 0.5}).greed == 0.5
