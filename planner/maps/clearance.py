@@ -524,8 +524,16 @@ def circle_margin(
     offx: np.ndarray, offy: np.ndarray, r_c: float,
 ) -> float:
     """Min over circles of (clearance − r_c) at one pose; −inf when a circle leaves the map."""
-    c = math.cos(yaw)
-    s = math.sin(yaw)
+    return circle_margin_at(clear, ox, oy, res, x, y, math.cos(yaw), math.sin(yaw), offx, offy, r_c)
+
+
+@njit(cache=True)
+def circle_margin_at(
+    clear: np.ndarray, ox: float, oy: float, res: float, x: float, y: float, c: float, s: float,
+    offx: np.ndarray, offy: np.ndarray, r_c: float,
+) -> float:
+    """:func:`circle_margin` with the heading given as its cosine ``c`` and sine ``s`` (the search's sweeps
+    compute them once per motion or share them with the pose itself; the value is the same to the bit)."""
     h, w = clear.shape
     best = math.inf
     for k in range(offx.size):
