@@ -465,6 +465,9 @@ class HybridAStar:
         # The circles' margin is a lower bound of the polygon's clearance: only poses whose bound could beat
         # the best exact distance found so far are measured exactly.
         clearance_m = self.clearance.least_footprint_distance(self.polygon, fine[:, :3], margins, CLEARANCE_REACH_M)
+        length = self._length(start, motions)
+        # issue 21's measure of how directly the search heads for the goal: all searches' expansions per metre
+        extra["expansions_per_m"] = expansions / length if length > 0 else math.nan
         elapsed = time.perf_counter() - t0
         return PlanResult(
             status="exact",

@@ -70,6 +70,15 @@ def test_reverse_option_and_calibrated_robot():
         assert check_path(grid, robot, result.states, start, goal) == []
 
 
+def test_expansions_per_metre_in_the_result(planner):
+    """Issue 21 item 3: extra["expansions_per_m"] is the expansions over the returned path's length."""
+    result = planner.plan((2, 2, 0), (18, 18, math.pi / 2))
+    xy = result.states[:, :2]
+    polyline = float(np.hypot(*np.diff(xy, axis=0).T).sum())  # the states' chords: within a percent of the arcs
+    assert result.expansions > 0
+    assert result.extra["expansions_per_m"] == pytest.approx(result.expansions / polyline, rel=0.01)
+
+
 def test_same_input_same_path(planner):
     a = planner.plan((2, 2, 0), (18, 18, 1.0))
     b = planner.plan((2, 2, 0), (18, 18, 1.0))
