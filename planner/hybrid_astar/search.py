@@ -53,7 +53,7 @@ from planner.hybrid_astar import kernels
 from planner.hybrid_astar.dubins import dubins_distance
 from planner.hybrid_astar.heuristics import HolonomicHeuristic, auto_downsample, coarse_cost_grid, reeds_shepp_table
 from planner.hybrid_astar.two_ended import GoalSide, goal_side_possible
-from planner.kinematics import child_pose, densify_motions, wrap
+from planner.kinematics import densify_motions, motion_knots, wrap
 from planner.maps.clearance import CircleFootprint, ClearanceMap, inscribed_radius
 from planner.maps.reachability import refuse_unreachable
 from planner.occupancy import OccupancyGrid
@@ -632,15 +632,8 @@ class HybridAStar:
 
     def _knots(self, start: Pose, motions: list[tuple[float, float, float]], roll: float = 0.0) -> np.ndarray:
         """Pose (x, y, yaw, roll) and distance travelled at the start and after every motion: (n+1, 5)."""
-        x, y, yaw = start
-        dist = 0.0
-        rows = [(x, y, yaw, roll, dist)]
-        for held, curv, s in motions:
-            x2, y2, yaw2 = child_pose(x, y, yaw, roll, held, curv, self.robot.radius_m, s)
-            dist += abs(s) + self.robot.radius_m * abs(held - roll)
-            x, y, yaw, roll = x2, y2, yaw2, held
-            rows.append((x, y, yaw, roll, dist))
-        return np.array(rows)
+        return motion_knots(float(start[0]), float(start[1]), float(start[2]), float(roll),
+                            np.array(motions, float).reshape(-1, 3), self.robot.radius_m)
 
     def _subdivide(self, motions: list[tuple[float, float, float]]) -> list[tuple[float, float, float]]:
         """Split motions longer than one search step into equal pieces (more knots to shortcut from)."""

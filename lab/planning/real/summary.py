@@ -211,7 +211,8 @@ def format_real_table(summaries: Sequence[MapSummary]) -> str:
             _fmt(s.both_ratio_median, 2), _fmt(s.both_ratio_p90, 2), str(s.unsolved),
             _fmt(s.unsolved_time_p50_s, 3), _fmt(s.disconnected_time_max_s, 3), _fmt(s.length_ratio_median, 3),
             _fmt(s.length_ratio_max, 3),
-            _fmt(s.first_ratio_median, 3), _fmt(s.longer_than_first, 2), _fmt(s.expansions_per_s, 0), _fmt(s.expansions_per_m, 0),
+            _fmt(s.first_ratio_median, 3), _fmt(s.longer_than_first, 2), _fmt(s.expansions_per_s, 0),
+            _fmt(s.expansions_per_m, 0),
             _fmt(s.clearance_median_m, 3), _fmt(s.reported_clearance_median_m, 3),
         ])
     head = [c[0] for c in TABLE_COLUMNS]
