@@ -467,7 +467,8 @@ class HybridAStar:
         clearance_m = self.clearance.least_footprint_distance(self.polygon, fine[:, :3], margins, CLEARANCE_REACH_M)
         length = self._length(start, motions)
         # issue 21's measure of how directly the search heads for the goal: all searches' expansions per metre
-        extra["expansions_per_m"] = expansions / length if length > 0 else math.nan
+        # (None for a path of no length: the result is sent as JSON, which has no NaN)
+        extra["expansions_per_m"] = expansions / length if length > 0 else None
         elapsed = time.perf_counter() - t0
         return PlanResult(
             status="exact",

@@ -77,6 +77,8 @@ def test_expansions_per_metre_in_the_result(planner):
     polyline = float(np.hypot(*np.diff(xy, axis=0).T).sum())  # the states' chords: within a percent of the arcs
     assert result.expansions > 0
     assert result.extra["expansions_per_m"] == pytest.approx(result.expansions / polyline, rel=0.01)
+    here = planner.plan((2, 2, 0), (2, 2, 0))  # already there: no length, no ratio (and no NaN in the JSON)
+    assert here.length_m == 0.0 and here.extra["expansions_per_m"] is None
 
 
 def test_same_input_same_path(planner):
