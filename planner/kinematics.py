@@ -67,6 +67,26 @@ def child_pose(
 
 
 @njit(cache=True)
+def motion_knots(x: float, y: float, yaw: float, roll: float, motions: np.ndarray, radius_m: float) -> np.ndarray:
+    """Pose (x, y, yaw, roll) and distance travelled at the start and after every motion: (n+1, 5) rows.
+
+    ``motions`` rows are (held roll, curvature, signed arc length) from (x, y, yaw) at ``roll``; the distance
+    counts each arc's length and each roll change's sideways shift. (The planner calls this on every
+    candidate path of its smoother, a thousand times per plan: it ran in Python before.)
+    """
+    out = np.empty((motions.shape[0] + 1, 5))
+    dist = 0.0
+    out[0, 0], out[0, 1], out[0, 2], out[0, 3], out[0, 4] = x, y, yaw, roll, dist
+    for k in range(motions.shape[0]):
+        held, curv, s = motions[k, 0], motions[k, 1], motions[k, 2]
+        x, y, yaw = child_pose(x, y, yaw, roll, held, curv, radius_m, s)
+        dist += abs(s) + radius_m * abs(held - roll)
+        roll = held
+        out[k + 1, 0], out[k + 1, 1], out[k + 1, 2], out[k + 1, 3], out[k + 1, 4] = x, y, yaw, roll, dist
+    return out
+
+
+@njit(cache=True)
 def densify_motions(start: np.ndarray, motions: np.ndarray, radius_m: float, spacing_m: float) -> np.ndarray:
     """Dense poses along a chain of motions, consecutive rows at most ``spacing_m`` apart.
 

@@ -80,12 +80,42 @@ def _block_max(clearance: np.ndarray, factor: int) -> np.ndarray:
 def _dijkstra16(mult: np.ndarray, gx: int, gy: int, cell_m: float, sx: int, sy: int, stop_factor: float) -> np.ndarray:
     """Cost-to-go from cell (gx, gy). Once the start cell (sx, sy) is settled at d_s, the wavefront stops
     at stop_factor·d_s + 4 cells: every cell not settled by then gets the last settled cost, a lower
-    bound of its own, so the table stays admissible while the far side of a large map is skipped."""
+    bound of its own, so the table stays admissible while the far side of a large map is skipped.
+
+    Run once per new goal, inside the plan's time: the passability of every cell, each move's length factor
+    and the cells a knight move passes are looked up, not recomputed per move, and the heap starts at one
+    entry per cell and grows when needed (it was sized for the worst case, 16 per cell). The pushes and pops
+    are the same, in the same order, so the table is the same to the bit."""
     h, w = mult.shape
     dist = np.full((h, w), np.inf)
     if not (0 <= gx < w and 0 <= gy < h) or not np.isfinite(mult[gy, gx]):
         return dist
-    cap = h * w * _MOVES.shape[0] + 16  # each settled cell pushes at most one entry per move
+    n_moves = _MOVES.shape[0]
+    # per move: (length × cell × ½) as the step below multiplies it, and the two cells a diagonal or knight
+    # move passes (offsets from the cell left; both the target for a straight move)
+    coef = np.empty(n_moves)
+    pass_a = np.empty((n_moves, 2), dtype=np.int64)
+    pass_b = np.empty((n_moves, 2), dtype=np.int64)
+    for k in range(n_moves):
+        mx = _MOVES[k, 0]
+        my = _MOVES[k, 1]
+        coef[k] = math.sqrt(mx * mx + my * my) * cell_m * 0.5
+        if abs(mx) + abs(my) == 3:
+            pass_a[k, 0] = mx // 2 if abs(mx) == 2 else 0
+            pass_a[k, 1] = my // 2 if abs(my) == 2 else 0
+            pass_b[k, 0] = mx if abs(mx) == 1 else mx // 2
+            pass_b[k, 1] = my if abs(my) == 1 else my // 2
+        elif abs(mx) + abs(my) == 2:
+            pass_a[k, 0], pass_a[k, 1] = mx, 0
+            pass_b[k, 0], pass_b[k, 1] = 0, my
+        else:
+            pass_a[k, 0], pass_a[k, 1] = mx, my
+            pass_b[k, 0], pass_b[k, 1] = mx, my
+    passable = np.empty((h, w), dtype=np.bool_)
+    for iy in range(h):
+        for ix in range(w):
+            passable[iy, ix] = np.isfinite(mult[iy, ix])
+    cap = h * w + 16
     keys = np.empty(cap)
     vals = np.empty(cap, dtype=np.int64)
     size = np.zeros(1, dtype=np.int64)
@@ -105,36 +135,25 @@ def _dijkstra16(mult: np.ndarray, gx: int, gy: int, cell_m: float, sx: int, sy: 
         done[cy, cx] = True
         if cx == sx and cy == sy:
             stop = stop_factor * d + 4.0 * cell_m
-        for k in range(_MOVES.shape[0]):
-            mx = _MOVES[k, 0]
-            my = _MOVES[k, 1]
-            nx = cx + mx
-            ny = cy + my
-            if nx < 0 or ny < 0 or nx >= w or ny >= h or done[ny, nx]:
+        here = mult[cy, cx]
+        if size[0] + n_moves > keys.size:  # each settled cell pushes at most one entry per move
+            keys = np.concatenate((keys, np.empty(keys.size)))
+            vals = np.concatenate((vals, np.empty(vals.size, dtype=np.int64)))
+        for k in range(n_moves):
+            nx = cx + _MOVES[k, 0]
+            ny = cy + _MOVES[k, 1]
+            if nx < 0 or ny < 0 or nx >= w or ny >= h or done[ny, nx] or not passable[ny, nx]:
                 continue
-            m = mult[ny, nx]
-            if not np.isfinite(m):
+            if not (passable[cy + pass_a[k, 1], cx + pass_a[k, 0]] and passable[cy + pass_b[k, 1], cx + pass_b[k, 0]]):
                 continue
-            if abs(mx) + abs(my) == 3:
-                # knight move: both cells it passes must be open
-                ax = cx + (mx // 2 if abs(mx) == 2 else 0)
-                ay = cy + (my // 2 if abs(my) == 2 else 0)
-                bx = cx + (mx if abs(mx) == 1 else mx // 2)
-                by = cy + (my if abs(my) == 1 else my // 2)
-                if not (np.isfinite(mult[ay, ax]) and np.isfinite(mult[by, bx])):
-                    continue
-            elif abs(mx) + abs(my) == 2:
-                if not (np.isfinite(mult[cy, nx]) and np.isfinite(mult[ny, cx])):
-                    continue
-            step = math.sqrt(mx * mx + my * my) * cell_m * 0.5 * (m + mult[cy, cx])
-            nd = d + step
+            nd = d + coef[k] * (mult[ny, nx] + here)
             if nd < dist[ny, nx]:
                 dist[ny, nx] = nd
                 heap_push(keys, vals, size, nd, ny * w + nx)
     if size[0] > 0:
         for iy in range(h):
             for ix in range(w):
-                if not done[iy, ix] and np.isfinite(mult[iy, ix]):
+                if not done[iy, ix] and passable[iy, ix]:
                     dist[iy, ix] = d
     return dist
 

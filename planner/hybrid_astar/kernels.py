@@ -21,8 +21,8 @@ from planner.hybrid_astar.dubins import WORD_TURNS, dubins_distance, dubins_shor
 from planner.hybrid_astar.heap import heap_pop, heap_push
 from planner.hybrid_astar.reeds_shepp import MAX_SEGS as RS_MAX_SEGS
 from planner.hybrid_astar.reeds_shepp import MAX_SHOT_M, rs_best, rs_ranked
-from planner.kinematics import arc_step, roll_shift, wrap
-from planner.maps.clearance import circle_margin, footprint_hits
+from planner.kinematics import STRAIGHT_EPS, arc_step, roll_shift, wrap
+from planner.maps.clearance import circle_margin_at, footprint_hits
 
 RUNNING, FOUND, EXHAUSTED, FULL = 0, 1, 2, 3
 SHOT_DUBINS, SHOT_WEIGHTED, SHOT_SHORTEST, SHOT_SECOND, SHOT_THIRD = 0, 1, 2, 3, 4  # analytic shot kinds (try_shot)
@@ -58,8 +58,18 @@ def _pose_margin(
     r_in − (√2 + 1/√2)·res less a micrometre (r_in: the inscribed radius), and a stored clearance below it
     proves the hit.
     """
+    return _pose_margin_at(clear, blocked, p, offx, offy, px, py, x, y, yaw, math.cos(yaw), math.sin(yaw))
+
+
+@njit(cache=True)
+def _pose_margin_at(
+    clear: np.ndarray, blocked: np.ndarray, p: np.ndarray, offx: np.ndarray, offy: np.ndarray, px: np.ndarray,
+    py: np.ndarray, x: float, y: float, yaw: float, c: float, s: float,
+) -> float:
+    """:func:`_pose_margin` given cos(yaw) = ``c`` and sin(yaw) = ``s`` as well (the same value to the bit): the
+    sweeps below compute them once per motion, not once per sample."""
     ox, oy, res = p[P_OX], p[P_OY], p[P_RES]
-    m = circle_margin(clear, ox, oy, res, x, y, yaw, offx, offy, p[P_RC])
+    m = circle_margin_at(clear, ox, oy, res, x, y, c, s, offx, offy, p[P_RC])
     if m >= 0.0:
         return m
     hit = m if m > -1e9 else -1e9
@@ -80,6 +90,17 @@ def _shift_margin(
 ) -> float:
     """The roll-change part of :func:`_motion_margin`: the smallest margin while the shell rolls sideways by
     r·``d_roll`` (returns as soon as it is negative)."""
+    return _shift_margin_at(clear, blocked, p, offx, offy, px, py, x, y, yaw, math.cos(yaw), math.sin(yaw), d_roll,
+                            worst_so_far)
+
+
+@njit(cache=True)
+def _shift_margin_at(
+    clear: np.ndarray, blocked: np.ndarray, p: np.ndarray, offx: np.ndarray, offy: np.ndarray, px: np.ndarray,
+    py: np.ndarray, x: float, y: float, yaw: float, cy: float, sy: float, d_roll: float, worst_so_far: float,
+) -> float:
+    """:func:`_shift_margin` given cos(yaw) = ``cy`` and sin(yaw) = ``sy``: the heading does not change during a
+    roll change, so no sample computes a sine (the poses are :func:`roll_shift`'s to the bit)."""
     radius, spacing = p[P_RADIUS], p[P_SPACING]
     worst = worst_so_far
     shift = abs(radius * d_roll)
@@ -87,8 +108,9 @@ def _shift_margin(
     advance = spacing
     while t < shift:
         t = min(shift, t + advance)
-        xs, ys = roll_shift(x, y, yaw, radius, math.copysign(t / radius, d_roll))
-        m = _pose_margin(clear, blocked, p, offx, offy, px, py, xs, ys, yaw)
+        dr = math.copysign(t / radius, d_roll)
+        xs, ys = x - radius * dr * sy, y + radius * dr * cy
+        m = _pose_margin_at(clear, blocked, p, offx, offy, px, py, xs, ys, yaw, cy, sy)
         if m < worst:
             worst = m
             if worst < 0.0:
@@ -103,16 +125,37 @@ def _arc_margin(
     py: np.ndarray, x1: float, y1: float, yaw: float, curv: float, s: float, worst_so_far: float,
 ) -> float:
     """The arc part of :func:`_motion_margin`, from (x1, y1, yaw) after the roll change."""
+    return _arc_margin_at(clear, blocked, p, offx, offy, px, py, x1, y1, yaw, math.cos(yaw), math.sin(yaw), curv, s,
+                          worst_so_far)
+
+
+@njit(cache=True)
+def _arc_margin_at(
+    clear: np.ndarray, blocked: np.ndarray, p: np.ndarray, offx: np.ndarray, offy: np.ndarray, px: np.ndarray,
+    py: np.ndarray, x1: float, y1: float, yaw: float, cy: float, sy: float, curv: float, s: float,
+    worst_so_far: float,
+) -> float:
+    """:func:`_arc_margin` given cos(yaw) = ``cy`` and sin(yaw) = ``sy``: a sample on an arc computes the sine and
+    cosine of its own heading once (for its position and its circles), one on a straight none; the poses are
+    :func:`arc_step`'s to the bit."""
     spacing = p[P_SPACING]
     worst = worst_so_far
     length = abs(s)
     factor = 1.0 + abs(curv) * p[P_REACH]
+    straight = abs(curv) < STRAIGHT_EPS
     t = 0.0
     advance = spacing
     while t < length:
         t = min(length, t + advance)
-        xa, ya, ya2 = arc_step(x1, y1, yaw, curv, math.copysign(t, s))
-        m = _pose_margin(clear, blocked, p, offx, offy, px, py, xa, ya, ya2)
+        st = math.copysign(t, s)
+        if straight:
+            m = _pose_margin_at(clear, blocked, p, offx, offy, px, py, x1 + st * cy, y1 + st * sy, yaw, cy, sy)
+        else:
+            ya2 = yaw + curv * st
+            c2 = math.cos(ya2)
+            s2 = math.sin(ya2)
+            m = _pose_margin_at(clear, blocked, p, offx, offy, px, py, x1 + (s2 - sy) / curv, y1 - (c2 - cy) / curv,
+                                ya2, c2, s2)
         if m < worst:
             worst = m
             if worst < 0.0:
@@ -172,6 +215,13 @@ def _heuristic(htab: np.ndarray, rs: np.ndarray, p: np.ndarray, x: float, y: flo
 
 
 @njit(cache=True)
+def _wrap_cs(c: float, s: float) -> float:
+    """:func:`planner.kinematics.wrap` of an angle given its cosine and sine (the same value to the bit)."""
+    w = math.atan2(s, c)
+    return math.pi if w == -math.pi else w
+
+
+@njit(cache=True)
 def _closed_key(p: np.ndarray, w: int, x: float, y: float, yaw: float, rb: int, n_rb: int) -> int:
     ix = int(math.floor((x - p[P_OX]) / p[P_RES]))
     iy = int(math.floor((y - p[P_OY]) / p[P_RES]))
@@ -179,6 +229,16 @@ def _closed_key(p: np.ndarray, w: int, x: float, y: float, yaw: float, rb: int, 
     a = yaw - 2.0 * math.pi * math.floor(yaw / (2.0 * math.pi))
     yb = int(a / (2.0 * math.pi) * n_yaw) % n_yaw
     return ((iy * w + ix) * n_yaw + yb) * n_rb + rb
+
+
+@njit(cache=True)
+def clear_closed(p: np.ndarray, w: int, node_f: np.ndarray, node_i: np.ndarray, roll_bins: np.ndarray, n_roll_bins: int,
+                 n_nodes: int, closed: np.ndarray) -> None:
+    """Zero the closed-set bytes of the first ``n_nodes`` nodes' keys: every key :func:`search_chunk` closed is one
+    of them (it closes the key of a node it pops), so the bitset is all zero again and can serve another search."""
+    for k in range(n_nodes):
+        key = _closed_key(p, w, node_f[k, 0], node_f[k, 1], node_f[k, 2], roll_bins[node_i[k, 1]], n_roll_bins)
+        closed[key >> 3] = 0
 
 
 @njit(cache=True)
@@ -607,6 +667,9 @@ def search_chunk(
         #    OPEN_MIN_H from the goal, a child rolls P_LONG steps at once (item 3 of issue 21: fewer expansions where
         #    there is room); its sweep is checked as any.
         #    node_i[., 2] then holds direction × steps.
+        #    The parent's heading's sine and cosine are computed once: every child, and every sample of the sweeps,
+        #    then needs only its own heading's (the poses are roll_shift's and arc_step's to the bit, so the search
+        #    closes the same bins; a child's heading is wrapped from the same sine and cosine, as wrap() does).
         parent_dir = 1 if node_i[k, 2] > 0 else -1 if node_i[k, 2] < 0 else 0
         mult = 1
         if p[P_LONG] > 1.0 and h_here > OPEN_MIN_H:
@@ -616,28 +679,42 @@ def search_chunk(
                     and clear[niy, nix] >= p[P_REACH] + p[P_RC] + p[P_LONG] * step + 2.0 * radius * p[P_MAX_ROLL]):
                 mult = int(p[P_LONG])
         shift_worst[:] = math.nan
+        c_yaw = math.cos(yaw)
+        s_yaw = math.sin(yaw)
+        straight_yaw = _wrap_cs(c_yaw, s_yaw)
         for d in range(2):
             direction = 1 if d == 0 else -1
             if direction < 0 and not allow_reverse:
                 break
+            s_child = direction * step * mult
             for ri in range(n_roll):
                 d_roll = rolls[ri] - roll
-                cx, cy = roll_shift(x, y, yaw, radius, d_roll)
-                cx, cy, cyaw = arc_step(cx, cy, yaw, curvs[ri], direction * step * mult)
-                cyaw = wrap(cyaw)
+                x1 = x - radius * d_roll * s_yaw
+                y1 = y + radius * d_roll * c_yaw
+                curv = curvs[ri]
+                if abs(curv) < STRAIGHT_EPS:
+                    cx = x1 + s_child * c_yaw
+                    cy = y1 + s_child * s_yaw
+                    cyaw = straight_yaw
+                else:
+                    yaw2 = yaw + curv * s_child
+                    c2 = math.cos(yaw2)
+                    s2 = math.sin(yaw2)
+                    cx = x1 + (s2 - s_yaw) / curv
+                    cy = y1 - (c2 - c_yaw) / curv
+                    cyaw = _wrap_cs(c2, s2)
                 # a child already expanded is dropped before its (far dearer) collision sweep
                 ckey = _closed_key(p, w, cx, cy, cyaw, roll_bins[ri], n_roll_bins)
                 if closed[ckey >> 3] & (1 << (ckey & 7)):
                     continue
                 # the sweep of a roll change is the same forwards and backwards: done once per roll
                 if math.isnan(shift_worst[ri]):
-                    shift_worst[ri] = _shift_margin(clear, blocked, p, offx, offy, px, py, x, y, yaw, d_roll,
-                                                    math.inf)
+                    shift_worst[ri] = _shift_margin_at(clear, blocked, p, offx, offy, px, py, x, y, yaw, c_yaw, s_yaw,
+                                                       d_roll, math.inf)
                 if shift_worst[ri] < 0.0:
                     continue
-                x1, y1 = roll_shift(x, y, yaw, radius, d_roll)
-                margin = _arc_margin(clear, blocked, p, offx, offy, px, py, x1, y1, yaw, curvs[ri],
-                                     direction * step * mult, shift_worst[ri])
+                margin = _arc_margin_at(clear, blocked, p, offx, offy, px, py, x1, y1, yaw, c_yaw, s_yaw, curv,
+                                        s_child, shift_worst[ri])
                 if margin < 0.0:
                     continue
                 h = _heuristic(htab, rs, p, cx, cy, cyaw)

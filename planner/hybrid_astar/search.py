@@ -54,7 +54,7 @@ from planner.hybrid_astar.anytime import MAX_IMPROVE_S, improve
 from planner.hybrid_astar.dubins import dubins_distance
 from planner.hybrid_astar.heuristics import HolonomicHeuristic, auto_downsample, coarse_cost_grid, reeds_shepp_table
 from planner.hybrid_astar.two_ended import GoalSide, goal_side_possible
-from planner.kinematics import child_pose, densify_motions, wrap
+from planner.kinematics import densify_motions, motion_knots, wrap
 from planner.maps.clearance import CircleFootprint, ClearanceMap, inscribed_radius
 from planner.maps.reachability import refuse_unreachable
 from planner.occupancy import OccupancyGrid
@@ -77,6 +77,9 @@ MEET_AFTER = 10_000  # expansions of both sides before shots try to join their t
 FORWARD_RETRY_MIN = 20_000  # expansions a forward-only search may always take to find a cheaper path
 FORWARD_RETRY_SHARE = 0.5  # ... tried when the path found rolls more than this share of its length backwards
 FORWARD_CHECK_BUDGET = 1_000  # ... unless a forward-only search from the goal exhausts within this many (a dead end)
+CLOSED_POOL_SIZE = 2  # closed sets a planner keeps for reuse (two searches run at once in a two-ended plan)
+CLOSED_REUSE_NODES = 200_000  # a search with more nodes drops its closed set (zeroing it would cost more)
+CLOSED_REUSE_MAX_MB = 128  # larger closed sets are not kept (a 4-million-cell map's is 108 MB at the defaults)
 CLOSED_SET_BUDGET_MB = 1024  # the closed-set bitset of one plan may not exceed this (≈ 6300² cells at defaults, tested)
 
 
@@ -256,7 +259,7 @@ class _Search:
         self.p = p
         grid = planner.grid
         n_keys = grid.width * grid.height * o.n_yaw_bins * planner.n_roll_bins
-        self.closed = np.zeros(n_keys // 8 + 1, dtype=np.uint8)
+        self.closed = planner._closed_bitset(n_keys // 8 + 1)
         cap = 1 << 16
         self.node_f = np.empty((cap, 5))
         self.node_i = np.empty((cap, 3), dtype=np.int64)
@@ -275,6 +278,21 @@ class _Search:
     @property
     def expansions(self) -> int:
         return int(self.counters[kernels.C_EXPANSIONS])
+
+    def __del__(self) -> None:
+        # hand the closed set back, zeroed, unless clearing it would cost more than fresh pages or it is too big
+        # to keep (a planner holds at most CLOSED_POOL_SIZE × CLOSED_REUSE_MAX_MB)
+        counters = getattr(self, "counters", None)
+        if counters is None:  # __init__ did not finish
+            return
+        n = int(counters[kernels.C_NODES])
+        pool = self.planner._closed_pool
+        if (n <= CLOSED_REUSE_NODES and len(pool) < CLOSED_POOL_SIZE
+                and self.closed.size <= CLOSED_REUSE_MAX_MB * 2**20):
+            pl = self.planner
+            kernels.clear_closed(self.p, pl.grid.width, self.node_f, self.node_i, pl.roll_bins, pl.n_roll_bins, n,
+                                 self.closed)
+            pool.append(self.closed)
 
     def step(self, budget: int) -> int:
         """Run up to ``budget`` expansions; returns the compiled loop's status (FULL is handled here)."""
@@ -315,6 +333,7 @@ class HybridAStar:
             )
         self.grid = grid
         self.robot = robot
+        self._closed_pool: list[np.ndarray] = []  # zeroed closed sets that finished searches handed back
         self.footprint = CircleFootprint.for_robot(robot, self.options.n_circles)
         self.polygon = robot.footprint_polygon
         self._px = np.ascontiguousarray(self.polygon[:, 0])
@@ -345,6 +364,17 @@ class HybridAStar:
                                                self.footprint.radius_m,
                                                max(o.proximity_range_m, robot.preferred_clearance_m), o.cost_penalty,
                                                self.heuristic_factor)
+
+    def _closed_bitset(self, n_bytes: int) -> np.ndarray:
+        """An all-zero closed-set bitset of ``n_bytes``: one a finished search handed back (zeroed where it
+        wrote), else a fresh one. A fresh one costs its pages' zeroing as the search first touches them (the
+        kernel zeroes whole 2 MB pages under numpy's huge-page advice), a few ms per search on a 4-million-cell
+        map; a reused one only the bytes the last search set."""
+        try:
+            closed = self._closed_pool.pop()
+        except IndexError:
+            return np.zeros(n_bytes, dtype=np.uint8)
+        return closed if closed.size == n_bytes else np.zeros(n_bytes, dtype=np.uint8)
 
     def holonomic(self, goal_xy: tuple[float, float], start_xy: tuple[float, float] | None = None
                   ) -> HolonomicHeuristic:
@@ -506,6 +536,10 @@ class HybridAStar:
         # The circles' margin is a lower bound of the polygon's clearance: only poses whose bound could beat
         # the best exact distance found so far are measured exactly.
         clearance_m = self.clearance.least_footprint_distance(self.polygon, fine[:, :3], margins, CLEARANCE_REACH_M)
+        length = self._length(start, motions)
+        # issue 21's measure of how directly the search heads for the goal: all searches' expansions per metre
+        # (None for a path of no length: the result is sent as JSON, which has no NaN)
+        extra["expansions_per_m"] = expansions / length if length > 0 else None
         elapsed = time.perf_counter() - t0
         return PlanResult(
             status="exact",
@@ -684,15 +718,8 @@ class HybridAStar:
 
     def _knots(self, start: Pose, motions: list[tuple[float, float, float]], roll: float = 0.0) -> np.ndarray:
         """Pose (x, y, yaw, roll) and distance travelled at the start and after every motion: (n+1, 5)."""
-        x, y, yaw = start
-        dist = 0.0
-        rows = [(x, y, yaw, roll, dist)]
-        for held, curv, s in motions:
-            x2, y2, yaw2 = child_pose(x, y, yaw, roll, held, curv, self.robot.radius_m, s)
-            dist += abs(s) + self.robot.radius_m * abs(held - roll)
-            x, y, yaw, roll = x2, y2, yaw2, held
-            rows.append((x, y, yaw, roll, dist))
-        return np.array(rows)
+        return motion_knots(float(start[0]), float(start[1]), float(start[2]), float(roll),
+                            np.array(motions, float).reshape(-1, 3), self.robot.radius_m)
 
     def _subdivide(self, motions: list[tuple[float, float, float]]) -> list[tuple[float, float, float]]:
         """Split motions longer than one search step into equal pieces (more knots to shortcut from)."""

@@ -297,16 +297,24 @@ class ClearanceMap:
         poses = np.ascontiguousarray(np.atleast_2d(np.asarray(poses, float))[:, :3])
         poly = np.asarray(polygon, float)
         px, py = np.ascontiguousarray(poly[:, 0]), np.ascontiguousarray(poly[:, 1])
-        best = reach_m
-        for k in np.argsort(lower_m):
-            if lower_m[k] >= best:
-                break
-            d = footprint_distance(self.blocked, self.origin_x, self.origin_y, self.resolution_m,
-                                 poses[k, 0], poses[k, 1], poses[k, 2], px, py, best)
-            best = min(best, d)
-            if best <= 0.0:
-                break
-        return float(best)
+        order = np.argsort(lower_m)
+        return float(_least_distance(self.blocked, self.origin_x, self.origin_y, self.resolution_m, poses,
+                                     np.ascontiguousarray(lower_m, dtype=float), order, px, py, reach_m))
+
+
+@njit(cache=True)
+def _least_distance(blocked: np.ndarray, ox: float, oy: float, res: float, poses: np.ndarray, lower_m: np.ndarray,
+                    order: np.ndarray, px: np.ndarray, py: np.ndarray, reach_m: float) -> float:
+    """:meth:`ClearanceMap.least_footprint_distance`'s loop, compiled (it ran in Python, a few ms per plan)."""
+    best = reach_m
+    for k in order:
+        if lower_m[k] >= best:
+            break
+        d = footprint_distance(blocked, ox, oy, res, poses[k, 0], poses[k, 1], poses[k, 2], px, py, best)
+        best = min(best, d)
+        if best <= 0.0:
+            break
+    return best
 
 
 def _polygon_samples(poly: np.ndarray, spacing_m: float) -> np.ndarray:
@@ -389,22 +397,50 @@ def footprint_hits(
 
     Exact for square cells: a blocked cell meets the polygon when its centre is inside it or one of its
     edges crosses the cell. ``blocked`` is the (height, width) boolean grid.
+
+    The search calls this wherever the covering circles touch an obstacle, millions of times per plan batch,
+    and there the polygon almost never does: a blocked cell of the bounding box farther from the pose than the
+    farthest vertex (plus a nanometre, far beyond rounding) cannot meet the polygon, so only the cells in that
+    disc are tested, and the answer is the one of testing them all (``tests/planner/maps/test_clearance.py``).
     """
-    wx, wy = _placed(x, y, yaw, px, py)
+    # the placed polygon's bounding box and farthest vertex, without building it (it is built only for a
+    # blocked cell within reach, which is rare here)
+    c = math.cos(yaw)
+    s = math.sin(yaw)
     n = px.size
     h, w = blocked.shape
-    ix0 = int(math.floor((wx.min() - ox) / res))
-    ix1 = int(math.floor((wx.max() - ox) / res))
-    iy0 = int(math.floor((wy.min() - oy) / res))
-    iy1 = int(math.floor((wy.max() - oy) / res))
+    x_lo = y_lo = math.inf
+    x_hi = y_hi = -math.inf
+    reach2 = 0.0
+    for i in range(n):
+        vx = x + c * px[i] - s * py[i]
+        vy = y + s * px[i] + c * py[i]
+        x_lo, x_hi, y_lo, y_hi = min(x_lo, vx), max(x_hi, vx), min(y_lo, vy), max(y_hi, vy)
+        reach2 = max(reach2, (vx - x) ** 2 + (vy - y) ** 2)
+    ix0 = int(math.floor((x_lo - ox) / res))
+    ix1 = int(math.floor((x_hi - ox) / res))
+    iy0 = int(math.floor((y_lo - oy) / res))
+    iy1 = int(math.floor((y_hi - oy) / res))
     if ix0 < 0 or iy0 < 0 or ix1 >= w or iy1 >= h:
         return True
+    reach2 = (math.sqrt(reach2) + 1e-9) ** 2
+    wx = wy = px  # placed on first use
+    placed = False
     for iy in range(iy0, iy1 + 1):
         by0 = oy + iy * res
+        gy = max(by0 - y, 0.0, y - by0 - res)
+        if gy * gy > reach2:
+            continue
         for ix in range(ix0, ix1 + 1):
             if not blocked[iy, ix]:
                 continue
             bx0 = ox + ix * res
+            gx = max(bx0 - x, 0.0, x - bx0 - res)
+            if gx * gx + gy * gy > reach2:
+                continue
+            if not placed:
+                wx, wy = _placed(x, y, yaw, px, py)
+                placed = True
             if _point_in_polygon(bx0 + 0.5 * res, by0 + 0.5 * res, wx, wy):
                 return True
             j = n - 1
@@ -474,12 +510,20 @@ def footprint_distance(
     ix1 = min(w - 1, int(math.floor((wx.max() + reach_m - ox) / res)))
     iy0 = max(0, int(math.floor((wy.min() - reach_m - oy) / res)))
     iy1 = min(h - 1, int(math.floor((wy.max() + reach_m - oy) / res)))
+    # a cell no nearer to the polygon's bounding box than the best distance so far cannot beat it (every
+    # vertex and edge point lies in the box); a nanometre of slack keeps rounding out of that decision
+    x_lo, x_hi, y_lo, y_hi = wx.min(), wx.max(), wy.min(), wy.max()
     for iy in range(iy0, iy1 + 1):
         by0 = oy + iy * res
+        gap_y = max(by0 - y_hi, 0.0, y_lo - by0 - res)
+        if gap_y > best + 1e-9:
+            continue
         for ix in range(ix0, ix1 + 1):
             if not blocked[iy, ix]:
                 continue
             bx0 = ox + ix * res
+            if math.hypot(max(bx0 - x_hi, 0.0, x_lo - bx0 - res), gap_y) > best + 1e-9:
+                continue
             for i in range(n):
                 gx = max(bx0 - wx[i], 0.0, wx[i] - bx0 - res)
                 gy = max(by0 - wy[i], 0.0, wy[i] - by0 - res)
@@ -524,8 +568,16 @@ def circle_margin(
     offx: np.ndarray, offy: np.ndarray, r_c: float,
 ) -> float:
     """Min over circles of (clearance − r_c) at one pose; −inf when a circle leaves the map."""
-    c = math.cos(yaw)
-    s = math.sin(yaw)
+    return circle_margin_at(clear, ox, oy, res, x, y, math.cos(yaw), math.sin(yaw), offx, offy, r_c)
+
+
+@njit(cache=True)
+def circle_margin_at(
+    clear: np.ndarray, ox: float, oy: float, res: float, x: float, y: float, c: float, s: float,
+    offx: np.ndarray, offy: np.ndarray, r_c: float,
+) -> float:
+    """:func:`circle_margin` with the heading given as its cosine ``c`` and sine ``s`` (the search's sweeps
+    compute them once per motion or share them with the pose itself; the value is the same to the bit)."""
     h, w = clear.shape
     best = math.inf
     for k in range(offx.size):

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
-from planner.kinematics import child_pose, densify_motions
+from planner.kinematics import child_pose, densify_motions, motion_knots
 
 R = 0.30
 
@@ -75,3 +75,25 @@ def test_densify_spacing_and_end():
         roll = held
     assert np.allclose(poses[-1, :3], [x, y, yaw])
     assert poses[-1, 3] == 0.0
+
+
+def test_motion_knots_follow_the_motions_and_count_arcs_and_shifts() -> None:
+    """motion_knots (compiled, the smoother's knots): each row is child_pose of the previous row, the last one
+    is where densify_motions ends, and the distance adds |s| and r·|Δroll| per motion."""
+    rng = np.random.default_rng(3)
+    radius = 0.3
+    motions = np.column_stack([rng.uniform(-0.26, 0.26, 40), rng.uniform(-1.5, 1.5, 40), rng.uniform(-0.8, 0.8, 40)])
+    motions[::5, 1] = 0.0  # straights
+    motions[-1] = (0.0, 0.0, 0.0)  # back upright on the spot
+    knots = motion_knots(1.0, -2.0, 0.4, 0.0, motions, radius)
+    assert knots.shape == (41, 5)
+    x, y, yaw, roll, dist = 1.0, -2.0, 0.4, 0.0, 0.0
+    for k, (held, curv, s) in enumerate(motions):
+        x, y, yaw = child_pose(x, y, yaw, roll, held, curv, radius, s)
+        dist += abs(s) + radius * abs(held - roll)
+        roll = held
+        assert np.allclose(knots[k + 1], (x, y, yaw, roll, dist), rtol=0, atol=1e-12)
+    end = densify_motions(np.array([1.0, -2.0, 0.4]), motions, radius, 0.01)[-1]
+    assert np.allclose(knots[-1, :3], end[:3], atol=1e-9)
+    shifts = radius * np.abs(np.diff(motions[:, 0], prepend=0.0)).sum()
+    assert knots[-1, 4] == pytest.approx(np.abs(motions[:, 2]).sum() + shifts)

@@ -39,7 +39,9 @@ class MapSummary:
     (``both_ratio_*``: sphereplan's time ÷ the faster reference's first-solution time, per problem, median and p90);
     ``length_ratio_*``: length ÷ the reference's best (final) length; ``first_ratio_median``: length ÷ the shortest
     BIT* first solution, ``longer_than_first``: the share of problems where sphereplan's path is longer than that;
-    ``expansions_per_s``: sphereplan's expansions ÷ its time, summed over its solved problems; ``clearance_*``:
+    ``expansions_per_s``: sphereplan's expansions ÷ its time, summed over its solved problems;
+    ``expansions_per_m``: sphereplan's expansions ÷ its path's length, median over its solved problems (issue 21's
+    measure of how directly the search heads for the goal where there is room); ``clearance_*``:
     medians over sphereplan's solved problems of the path's least clearance, true (polygon) and as reported.
     """
 
@@ -73,6 +75,7 @@ class MapSummary:
     first_ratio_median: float
     longer_than_first: float
     expansions_per_s: float
+    expansions_per_m: float
     clearance_median_m: float
     reported_clearance_median_m: float
 
@@ -157,6 +160,7 @@ def _summary(name: str, records: list[RunRecord], checker: FootprintReferee | No
         else math.nan,
         expansions_per_s=(sum(r.expansions for r in solved if r.expansions > 0)
                           / max(sum(r.time_s for r in solved if r.expansions > 0), 1e-9)) if solved else math.nan,
+        expansions_per_m=_median([r.expansions / r.length_m for r in solved if r.expansions > 0 and r.length_m > 0]),
         clearance_median_m=_median([r.min_clearance_m for r in solved]),
         reported_clearance_median_m=_median([r.reported_clearance_m for r in solved]),
     )
@@ -184,6 +188,7 @@ TABLE_COLUMNS = (
     ("len med", "length ÷ reference best, median"), ("len max", "length ÷ reference best, max"),
     ("÷first", "length ÷ BIT*'s first solution, median"), (">first", "share longer than BIT*'s first solution"),
     ("exp/s", "sphereplan expansions per second of planning time (solved problems)"),
+    ("exp/m", "sphereplan expansions per metre of its path, median (solved problems)"),
     ("clear m", "sphereplan's true footprint clearance, median"),
     ("rep m", "sphereplan's reported min_clearance_m, median"),
 )
@@ -207,6 +212,7 @@ def format_real_table(summaries: Sequence[MapSummary]) -> str:
             _fmt(s.unsolved_time_p50_s, 3), _fmt(s.disconnected_time_max_s, 3), _fmt(s.length_ratio_median, 3),
             _fmt(s.length_ratio_max, 3),
             _fmt(s.first_ratio_median, 3), _fmt(s.longer_than_first, 2), _fmt(s.expansions_per_s, 0),
+            _fmt(s.expansions_per_m, 0),
             _fmt(s.clearance_median_m, 3), _fmt(s.reported_clearance_median_m, 3),
         ])
     head = [c[0] for c in TABLE_COLUMNS]

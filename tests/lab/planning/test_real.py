@@ -300,3 +300,21 @@ def test_the_bench_survives_reference_failures(monkeypatch: pytest.MonkeyPatch) 
     (summary,) = result.summaries
     assert summary.ref_failed == 4 and summary.bit_solved == 0
     assert "ref×" in format_real_table(result.summaries)
+
+
+def test_summary_expansions_per_metre_is_the_median_over_solved_problems() -> None:
+    """Issue 21 item 3: expansions ÷ path length per solved problem (unknown counts and failures left out)."""
+    from lab.planning.real.summary import format_real_table
+
+    records = [
+        replace(_rec(0, SPHEREPLAN, "solved", 0.2, length=11.0, clear=0.3), expansions=220),  # 20 per metre
+        replace(_rec(1, SPHEREPLAN, "solved", 0.1, length=3.0, clear=0.3), expansions=90),  # 30 per metre
+        replace(_rec(2, SPHEREPLAN, "solved", 0.1, length=3.0, clear=0.3), expansions=-1),  # unknown: left out
+        replace(_rec(3, SPHEREPLAN, "timeout", 5.0), expansions=9000),  # not solved: left out
+    ]
+    grid = OccupancyGrid.from_occupied(_room(), 0.05, name="m")
+    (s,) = summarise(records, {"m": FootprintReferee.for_robot(grid, ROBOT)}, False, {}, {})
+    assert s.expansions_per_m == pytest.approx(25.0)
+    head, _, row = format_real_table([s]).splitlines()[:3]
+    end = head.index("exp/m") + len("exp/m")  # the columns are right-aligned under their heads
+    assert row[:end].split()[-1] == "25"

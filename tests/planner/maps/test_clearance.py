@@ -7,13 +7,17 @@ import math
 import numpy as np
 import pytest
 from matplotlib.path import Path
+from numba import njit
 
 from planner.maps.clearance import (
     CircleFootprint,
     ClearanceMap,
+    _point_in_polygon,
+    _segment_meets_box,
     boundary_cell_centres,
     least_footprint_distance,
 )
+from planner.maps.clearance import footprint_hits as footprint_hits_compiled
 from planner.occupancy import OccupancyGrid
 from planner.robot import RobotProfile, load_robot, profile_from_dict
 from tests.pathcheck import footprint_distance, footprint_hits
@@ -161,3 +165,59 @@ def test_the_compiled_distance_transform_equals_scipys():
         blocked = rng.random(shape) < share
         ref = distance_transform_edt(~np.pad(blocked, 1, constant_values=True))[1:-1, 1:-1]
         assert np.array_equal(edt_cells(blocked), ref)
+
+
+@njit(cache=True)
+def _hits_every_cell(blocked, ox, oy, res, x, y, yaw, px, py):
+    """The plain exact test: every blocked cell of the polygon's bounding box against the even-odd rule and
+    every edge (what :func:`footprint_hits` computed before it was reorganised for speed)."""
+    c, s = math.cos(yaw), math.sin(yaw)
+    wx, wy = x + c * px - s * py, y + s * px + c * py
+    n = px.size
+    h, w = blocked.shape
+    ix0, ix1 = int(math.floor((wx.min() - ox) / res)), int(math.floor((wx.max() - ox) / res))
+    iy0, iy1 = int(math.floor((wy.min() - oy) / res)), int(math.floor((wy.max() - oy) / res))
+    if ix0 < 0 or iy0 < 0 or ix1 >= w or iy1 >= h:
+        return True
+    for iy in range(iy0, iy1 + 1):
+        by0 = oy + iy * res
+        for ix in range(ix0, ix1 + 1):
+            if not blocked[iy, ix]:
+                continue
+            bx0 = ox + ix * res
+            if _point_in_polygon(bx0 + 0.5 * res, by0 + 0.5 * res, wx, wy):
+                return True
+            j = n - 1
+            for i in range(n):
+                if _segment_meets_box(wx[j], wy[j], wx[i], wy[i], bx0, by0, bx0 + res, by0 + res):
+                    return True
+                j = i
+    return False
+
+
+@pytest.mark.parametrize("robot", [load_robot("zju-60"), _box_robot(0.6, 0.2, 0.02)], ids=["zju-60", "box"])
+def test_compiled_footprint_tests_give_the_plain_tests_answers(robot: RobotProfile) -> None:
+    """footprint_hits (row crossings, edges only near their cells) answers as the plain every-cell test, and
+    footprint_distance (cells pruned by the polygon's bounding box) returns the unpruned distance, on poses
+    where the footprint touches obstacles (the search calls them there), cell corners and edges included."""
+    rng = np.random.default_rng(7)
+    occ = rng.random((120, 120)) < 0.002  # lone cells (islands a footprint can cover) and a block
+    occ[40:60, 50:90] = True
+    grid = OccupancyGrid.from_occupied(occ, 0.05)
+    clear = ClearanceMap(grid)
+    poly = robot.footprint_polygon
+    px, py = np.ascontiguousarray(poly[:, 0]), np.ascontiguousarray(poly[:, 1])
+    rng = np.random.default_rng(8)
+    poses = np.column_stack([rng.uniform(0.2, 5.8, 6000), rng.uniform(0.2, 5.8, 6000), rng.uniform(-3.2, 3.2, 6000)])
+    poses[:500, :2] = np.round(poses[:500, :2] / grid.resolution_m) * grid.resolution_m  # on cell corners
+    poses[:500, 2] = rng.choice([0.0, math.pi / 2, math.pi, -math.pi / 2], 500)
+    args = (clear.blocked, clear.origin_x, clear.origin_y, clear.resolution_m)
+    hits = 0
+    for x, y, yaw in poses:
+        fast = footprint_hits_compiled(*args, x, y, yaw, px, py)
+        assert fast == _hits_every_cell(*args, x, y, yaw, px, py), (x, y, yaw)
+        hits += fast
+    assert 0.1 * len(poses) < hits < 0.9 * len(poses)  # both answers are well represented
+    dist = clear.footprint_distances(poly, poses[:1500], reach_m=1.0)
+    for pose, d in zip(poses[:1500], dist, strict=True):
+        assert d == pytest.approx(footprint_distance(grid, robot, pose[None], reach_m=1.0), abs=1e-9)
