@@ -232,16 +232,6 @@ def _closed_key(p: np.ndarray, w: int, x: float, y: float, yaw: float, rb: int, 
 
 
 @njit(cache=True)
-def clear_closed(p: np.ndarray, w: int, node_f: np.ndarray, node_i: np.ndarray, roll_bins: np.ndarray, n_roll_bins: int,
-                 n_nodes: int, closed: np.ndarray) -> None:
-    """Zero the closed-set bytes of the first ``n_nodes`` nodes' keys: every key :func:`search_chunk` closed is one
-    of them (it closes the key of a node it pops), so the bitset is all zero again and can serve another search."""
-    for k in range(n_nodes):
-        key = _closed_key(p, w, node_f[k, 0], node_f[k, 1], node_f[k, 2], roll_bins[node_i[k, 1]], n_roll_bins)
-        closed[key >> 3] = 0
-
-
-@njit(cache=True)
 def _shot_word(p: np.ndarray, kind: int, x: float, y: float, yaw: float, tx: float, ty: float,
                gyaw: float, turns: np.ndarray, lens: np.ndarray) -> int:
     """The car's word from (x, y, yaw) to (tx, ty, gyaw): segment turns (+1, 0, −1) and signed lengths (m).

@@ -77,9 +77,6 @@ MEET_AFTER = 10_000  # expansions of both sides before shots try to join their t
 FORWARD_RETRY_MIN = 20_000  # expansions a forward-only search may always take to find a cheaper path
 FORWARD_RETRY_SHARE = 0.5  # ... tried when the path found rolls more than this share of its length backwards
 FORWARD_CHECK_BUDGET = 1_000  # ... unless a forward-only search from the goal exhausts within this many (a dead end)
-CLOSED_POOL_SIZE = 2  # closed sets a planner keeps for reuse (two searches run at once in a two-ended plan)
-CLOSED_REUSE_NODES = 200_000  # a search with more nodes drops its closed set (zeroing it would cost more)
-CLOSED_REUSE_MAX_MB = 128  # larger closed sets are not kept (a 4-million-cell map's is 108 MB at the defaults)
 CLOSED_SET_BUDGET_MB = 1024  # the closed-set bitset of one plan may not exceed this (≈ 6300² cells at defaults, tested)
 
 
@@ -259,7 +256,7 @@ class _Search:
         self.p = p
         grid = planner.grid
         n_keys = grid.width * grid.height * o.n_yaw_bins * planner.n_roll_bins
-        self.closed = planner._closed_bitset(n_keys // 8 + 1)
+        self.closed = np.zeros(n_keys // 8 + 1, dtype=np.uint8)
         cap = 1 << 16
         self.node_f = np.empty((cap, 5))
         self.node_i = np.empty((cap, 3), dtype=np.int64)
@@ -278,21 +275,6 @@ class _Search:
     @property
     def expansions(self) -> int:
         return int(self.counters[kernels.C_EXPANSIONS])
-
-    def __del__(self) -> None:
-        # hand the closed set back, zeroed, unless clearing it would cost more than fresh pages or it is too big
-        # to keep (a planner holds at most CLOSED_POOL_SIZE × CLOSED_REUSE_MAX_MB)
-        counters = getattr(self, "counters", None)
-        if counters is None:  # __init__ did not finish
-            return
-        n = int(counters[kernels.C_NODES])
-        pool = self.planner._closed_pool
-        if (n <= CLOSED_REUSE_NODES and len(pool) < CLOSED_POOL_SIZE
-                and self.closed.size <= CLOSED_REUSE_MAX_MB * 2**20):
-            pl = self.planner
-            kernels.clear_closed(self.p, pl.grid.width, self.node_f, self.node_i, pl.roll_bins, pl.n_roll_bins, n,
-                                 self.closed)
-            pool.append(self.closed)
 
     def step(self, budget: int) -> int:
         """Run up to ``budget`` expansions; returns the compiled loop's status (FULL is handled here)."""
@@ -333,7 +315,6 @@ class HybridAStar:
             )
         self.grid = grid
         self.robot = robot
-        self._closed_pool: list[np.ndarray] = []  # zeroed closed sets that finished searches handed back
         self.footprint = CircleFootprint.for_robot(robot, self.options.n_circles)
         self.polygon = robot.footprint_polygon
         self._px = np.ascontiguousarray(self.polygon[:, 0])
@@ -364,17 +345,6 @@ class HybridAStar:
                                                self.footprint.radius_m,
                                                max(o.proximity_range_m, robot.preferred_clearance_m), o.cost_penalty,
                                                self.heuristic_factor)
-
-    def _closed_bitset(self, n_bytes: int) -> np.ndarray:
-        """An all-zero closed-set bitset of ``n_bytes``: one a finished search handed back (zeroed where it
-        wrote), else a fresh one. A fresh one costs its pages' zeroing as the search first touches them (the
-        kernel zeroes whole 2 MB pages under numpy's huge-page advice), a few ms per search on a 4-million-cell
-        map; a reused one only the bytes the last search set."""
-        try:
-            closed = self._closed_pool.pop()
-        except IndexError:
-            return np.zeros(n_bytes, dtype=np.uint8)
-        return closed if closed.size == n_bytes else np.zeros(n_bytes, dtype=np.uint8)
 
     def holonomic(self, goal_xy: tuple[float, float], start_xy: tuple[float, float] | None = None
                   ) -> HolonomicHeuristic:

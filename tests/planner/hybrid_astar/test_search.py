@@ -81,22 +81,6 @@ def test_expansions_per_metre_in_the_result(planner):
     assert here.length_m == 0.0 and here.extra["expansions_per_m"] is None
 
 
-def test_closed_sets_are_handed_back_zeroed_and_reused():
-    """A finished search hands its closed set back all zero (kernels.clear_closed clears every key it closed); the
-    next plan reuses it and expands exactly what a planner with fresh sets does."""
-    grid = two_walls()
-    reused = HybridAStar(grid, load_robot())
-    first = reused.plan((2, 2, 0), (18, 18, math.pi / 2))
-    assert reused._closed_pool and all(not c.any() for c in reused._closed_pool)
-    pooled = list(reused._closed_pool)
-    second = reused.plan((3, 17, -math.pi / 2), (17, 3, 0.0))
-    assert any(c is p for c in reused._closed_pool for p in pooled)  # the same arrays went round again
-    assert all(not c.any() for c in reused._closed_pool)
-    fresh = HybridAStar(grid, load_robot()).plan((3, 17, -math.pi / 2), (17, 3, 0.0))
-    assert second.expansions == fresh.expansions and np.array_equal(second.states, fresh.states)
-    assert first.expansions > 0
-
-
 def test_same_input_same_path(planner):
     a = planner.plan((2, 2, 0), (18, 18, 1.0))
     b = planner.plan((2, 2, 0), (18, 18, 1.0))
