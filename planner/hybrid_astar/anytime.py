@@ -122,17 +122,9 @@ class Improver:
         return True
 
     def _valid(self, motions: list[Motion]) -> bool:
-        """Rolled from the start the path ends within the goal tolerance and its footprint is free at a quarter
-        cell (the final check of :meth:`HybridAStar.plan`, done here so a failed candidate is only dropped)."""
-        from planner.kinematics import wrap
-
-        pl, o = self.planner, self.o
-        end = pl._knots(self.start, motions)[-1]
-        if (math.hypot(end[0] - self.goal[0], end[1] - self.goal[1]) > o.goal_tolerance_m
-                or abs(wrap(float(end[2]) - self.goal[2])) > o.goal_tolerance_yaw_rad):
-            return False
-        fine = pl._densify(self.start, motions, pl.grid.resolution_m / 4)
-        return bool(pl.clearance.footprint_margins(pl.footprint, pl.polygon, fine[:, :3]).min() >= 0)
+        """Rolled from the start the path ends at the goal and is free (:meth:`HybridAStar.reaches_free`, the final
+        check of :meth:`HybridAStar.plan`, done here so a failed candidate is only dropped)."""
+        return bool(self.planner.reaches_free(self.start, self.goal, motions))
 
     def dense_smooth(self, motions: list[Motion], p: Any) -> list[Motion]:
         """Shortcut passes on knots every search step with DENSE_TRIES × the targets per knot, while a pass

@@ -686,6 +686,18 @@ class HybridAStar:
             spent.append(run.expansions)
         return exhausted
 
+    def reaches_free(self, start: Pose, goal: Pose, motions: list[tuple[float, float, float]]) -> bool:
+        """Rolled from ``start`` the motions end within the goal tolerance of ``goal`` and the footprint is free at
+        a quarter-cell spacing (the exact check of the final path): how a path found some other way than the forward
+        search's goal test (from the goal side, by a join, by an improvement round) is accepted."""
+        o = self.options
+        end = self._knots(start, motions)[-1]
+        if (math.hypot(end[0] - goal[0], end[1] - goal[1]) > o.goal_tolerance_m
+                or abs(wrap(float(end[2]) - goal[2])) > o.goal_tolerance_yaw_rad):
+            return False
+        fine = self._densify(start, motions, self.grid.resolution_m / 4)
+        return bool(self.clearance.footprint_margins(self.footprint, self.polygon, fine[:, :3]).min() >= 0)
+
     def _knots(self, start: Pose, motions: list[tuple[float, float, float]], roll: float = 0.0) -> np.ndarray:
         """Pose (x, y, yaw, roll) and distance travelled at the start and after every motion: (n+1, 5)."""
         return motion_knots(float(start[0]), float(start[1]), float(start[2]), float(roll),

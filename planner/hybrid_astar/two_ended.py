@@ -171,12 +171,5 @@ class GoalSide:
         return False
 
     def _valid(self, motions: list[Motion]) -> bool:
-        """Rolled from the true start the path ends within the goal tolerance and its footprint is free at a
-        quarter-cell spacing (the same exact check as the final one in :meth:`HybridAStar.plan`)."""
-        pl, o = self.planner, self.o
-        end = pl._knots(self.start, motions)[-1]
-        if (math.hypot(end[0] - self.goal[0], end[1] - self.goal[1]) > o.goal_tolerance_m
-                or abs(wrap(float(end[2]) - self.goal[2])) > o.goal_tolerance_yaw_rad):
-            return False
-        fine = pl._densify(self.start, motions, pl.grid.resolution_m / 4)
-        return bool(pl.clearance.footprint_margins(pl.footprint, pl.polygon, fine[:, :3]).min() >= 0)
+        """Rolled from the true start the path ends at the goal and is free (:meth:`HybridAStar.reaches_free`)."""
+        return bool(self.planner.reaches_free(self.start, self.goal, motions))

@@ -9,7 +9,6 @@ import json
 import math
 import time
 
-import numpy as np
 import pytest
 
 from planner.errors import InvalidInput, PlannerCancelled, PlannerTimedOut
@@ -20,6 +19,7 @@ from planner.occupancy import OccupancyGrid
 from planner.robot import load_robot
 from planner.termination import Termination
 from tests.pathcheck import check_path
+from tests.service.service_harness import hall_grid
 
 # the service tests' hall (10 m × 8 m, a wall from the bottom at x = 5 m): the first path from (2, 2) to (8, 2)
 # goes round the wall 0.6 m longer than the path the admissible search finds, which finishes in well under a second
@@ -28,12 +28,8 @@ BUDGET_S = 20.0  # far more than the rounds need (≈ 0.2 s on an idle machine):
 
 
 def hall() -> OccupancyGrid:
-    occupied = np.zeros((80, 100), dtype=bool)
-    occupied[[0, -1], :] = True
-    occupied[:, [0, -1]] = True
-    occupied[:45, 50:53] = True
-    occupied[65, :22] = True
-    return OccupancyGrid.from_occupied(occupied, 0.1, name="hall")
+    """The service tests' hall (one grid for the cross-door anytime test and these)."""
+    return hall_grid()
 
 
 @pytest.fixture(scope="module")
