@@ -129,3 +129,13 @@ def wrap(a: float) -> float:
     """A scalar angle wrapped to (−π, π] (compiled: usable from the search loop and from Python)."""
     w = math.atan2(math.sin(a), math.cos(a))
     return math.pi if w == -math.pi else w
+
+
+def subdivide(motions: list[tuple[float, float, float]], step: float) -> list[tuple[float, float, float]]:
+    """Split motions (held roll, curvature, signed length) longer than ``step`` into equal pieces: the same path,
+    more knots to shortcut from."""
+    out: list[tuple[float, float, float]] = []
+    for held, curv, s in motions:
+        n = max(1, math.ceil(abs(s) / step - 1e-9))
+        out.extend([(held, curv, s / n)] * n)
+    return out

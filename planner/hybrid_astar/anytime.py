@@ -35,7 +35,6 @@ cheaper path left to find; then the last smoothing still runs) or ``"rounds done
 
 from __future__ import annotations
 
-import math
 import time
 from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
@@ -138,7 +137,7 @@ class Improver:
             if self.until.remaining_s() < took:
                 break
             t = time.perf_counter()
-            candidate = pl._shortcut(self.start, subdivide(motions, pl.resolved_step_m), p, tries)
+            candidate = pl._shortcut(self.start, pl._subdivide(motions), p, tries)
             took = time.perf_counter() - t
             new_length = pl._length(self.start, candidate)
             if new_length > length - 1e-3:
@@ -168,15 +167,6 @@ class Improver:
         self.bound = min(self.bound, pl._search_cost(run))
         # (out of time with a held-back shot, _drive returns that shot: a path, but not the search's end)
         return pl._motions(run), run, not until.expired()
-
-
-def subdivide(motions: list[Motion], step: float) -> list[Motion]:
-    """Split motions longer than ``step`` into equal pieces (more knots to shortcut from)."""
-    out: list[Motion] = []
-    for held, curv, s in motions:
-        n = max(1, math.ceil(abs(s) / step - 1e-9))
-        out.extend([(held, curv, s / n)] * n)
-    return out
 
 
 def improve(planner: HybridAStar, start: Pose, goal: Pose, heur: HolonomicHeuristic, o: PlannerOptions,

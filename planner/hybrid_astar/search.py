@@ -54,7 +54,7 @@ from planner.hybrid_astar.anytime import MAX_IMPROVE_S, improve
 from planner.hybrid_astar.dubins import dubins_distance
 from planner.hybrid_astar.heuristics import HolonomicHeuristic, auto_downsample, coarse_cost_grid, reeds_shepp_table
 from planner.hybrid_astar.two_ended import GoalSide, goal_side_possible
-from planner.kinematics import densify_motions, motion_knots, wrap
+from planner.kinematics import densify_motions, motion_knots, subdivide, wrap
 from planner.maps.clearance import CircleFootprint, ClearanceMap, inscribed_radius
 from planner.maps.reachability import refuse_unreachable
 from planner.occupancy import OccupancyGrid
@@ -705,12 +705,7 @@ class HybridAStar:
 
     def _subdivide(self, motions: list[tuple[float, float, float]]) -> list[tuple[float, float, float]]:
         """Split motions longer than one search step into equal pieces (more knots to shortcut from)."""
-        step = self.resolved_step_m
-        out: list[tuple[float, float, float]] = []
-        for held, curv, s in motions:
-            n = max(1, math.ceil(abs(s) / step - 1e-9))
-            out.extend([(held, curv, s / n)] * n)
-        return out
+        return subdivide(motions, self.resolved_step_m)
 
     def _length(self, start: Pose, motions: list[tuple[float, float, float]]) -> float:
         return float(self._knots(start, motions)[-1, 4])

@@ -12,8 +12,9 @@ import time
 import pytest
 
 from planner.errors import InvalidInput, PlannerCancelled, PlannerTimedOut
-from planner.hybrid_astar.anytime import GREEDS, MAX_IMPROVE_S, subdivide
+from planner.hybrid_astar.anytime import GREEDS, MAX_IMPROVE_S
 from planner.hybrid_astar.search import HybridAStar, PlannerOptions
+from planner.kinematics import subdivide
 from planner.live import live_options
 from planner.occupancy import OccupancyGrid
 from planner.robot import load_robot
