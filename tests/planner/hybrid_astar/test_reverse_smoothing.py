@@ -116,7 +116,7 @@ def test_a_path_that_must_back_out_is_left_alone() -> None:
 def test_a_goal_that_cannot_be_approached_forwards_skips_the_forward_search() -> None:
     """pockets#8 of the real-map bench: the path rolls mostly backwards and a forward path could be cheaper by the
     Dubins bound, but the goal sits in a pocket that a forward-only search from the goal exhausts in a few states:
-    no forward path exists, so the 20 000-expansion forward search is not run (it was, before)."""
+    no forward path exists, so the forward search (up to 20 000 expansions) is not run (it was, before)."""
     from planner.hybrid_astar.dubins import dubins_distance
     from planner.hybrid_astar.search import FORWARD_CHECK_BUDGET
     from planner.termination import Termination
@@ -137,3 +137,23 @@ def test_a_goal_that_cannot_be_approached_forwards_skips_the_forward_search() ->
     # the garage's goal can be approached forwards: there the forward search still runs and wins (test above)
     assert HybridAStar(load_map("maps/garage.yaml"), ROBOT, o)._reverse_search(
         START, GOAL, o, Termination(10).start(), reverse=False, budget=FORWARD_CHECK_BUDGET) is None
+
+
+def test_the_forward_search_gets_a_budget_by_distance() -> None:
+    """smoothers_world#8 of the real-map bench (seed 0): the path rolls mostly backwards, a forward-only goal check
+    does not exhaust, and no cheaper forward path exists within reach. The forward search is given 400
+    expansions per metre of the 3.6 m between start and goal, at least 3 000; it ran the flat 20 000 before
+    (150–250 ms). On the open field a longer problem gets more (the accepted forward paths of 480 drawn problems
+    needed up to 371 per metre, docs/planning.md)."""
+    from planner.hybrid_astar.search import FORWARD_RETRY_MAX, FORWARD_RETRY_MIN
+
+    assert HybridAStar.forward_budget((0.0, 0.0, 0.0), (3.0, 4.0, 1.0)) == FORWARD_RETRY_MIN
+    assert HybridAStar.forward_budget((0.0, 0.0, 0.0), (30.0, 40.0, 1.0)) == 20_000 == FORWARD_RETRY_MAX
+    assert HybridAStar.forward_budget((0.0, 0.0, 0.0), (12.0, 16.0, 1.0)) == 8_000
+    grid = load_map("maps/real/smoothers_world.yaml")
+    start, goal = (9.275, 5.325, -0.9024881717968012), (7.875, 2.025, -1.7184486953680036)
+    result = HybridAStar(grid, ROBOT).plan(start, goal)
+    assert check_path(grid, ROBOT, result.states, start, goal) == []
+    assert _backwards_m(result.states) > 0.5 * result.length_m
+    assert "forward_alternative" not in result.extra
+    assert 0 < result.extra["forward_alternative_expansions"] <= FORWARD_RETRY_MIN
