@@ -560,7 +560,7 @@ def search_chunk(
     goal_margin = _motion_margin(clear, blocked, p, offx, offy, px, py, p[P_GX], p[P_GY], p[P_GYAW], 0.0, 0.0, 0.0,
                                  math.inf)
     goal_pose_margin = _pose_margin(clear, blocked, p, offx, offy, px, py, p[P_GX], p[P_GY], p[P_GYAW])
-    shift_worst = np.empty(n_roll)  # per held roll: the margin of the roll change from the node expanded
+    c2 = s2 = 0.0
     done = 0
     while done < max_expansions:
         # 1. Pop the cheapest open node; skip it if its (cell, yaw bin, roll) was already expanded. (A shot held
@@ -577,6 +577,24 @@ def search_chunk(
         key = _closed_key(p, w, x, y, yaw, roll_bins[node_i[k, 1]], n_roll_bins)
         if closed[key >> 3] & (1 << (key & 7)):
             continue
+        if node_i[k, 0] >= 0:
+            # 1b. Lazy sweep: a child was checked only at its end pose when it was pushed; its motion from the
+            #     parent is swept now that it is the cheapest open node (about six children are pushed per
+            #     expansion and most are never popped, so most sweeps are never needed). A motion that collides
+            #     is dropped without closing its key: another motion may still reach that state.
+            par = node_i[k, 0]
+            pyaw = node_f[par, 2]
+            cp = math.cos(pyaw)
+            sp = math.sin(pyaw)
+            d_roll = roll - node_f[par, 3]
+            mk = _shift_margin_at(clear, blocked, p, offx, offy, px, py, node_f[par, 0], node_f[par, 1], pyaw, cp, sp,
+                                  d_roll, math.inf)
+            if mk >= 0.0:
+                mk = _arc_margin_at(clear, blocked, p, offx, offy, px, py, node_f[par, 0] - radius * d_roll * sp,
+                                    node_f[par, 1] + radius * d_roll * cp, pyaw, cp, sp, curvs[node_i[k, 1]],
+                                    step * node_i[k, 2], mk)
+            if mk < 0.0:
+                continue
         closed[key >> 3] |= 1 << (key & 7)
         done += 1
         counters[C_EXPANSIONS] += 1
@@ -668,10 +686,11 @@ def search_chunk(
             if (0 <= nix < w and 0 <= niy < clear.shape[0]
                     and clear[niy, nix] >= p[P_REACH] + p[P_RC] + p[P_LONG] * step + 2.0 * radius * p[P_MAX_ROLL]):
                 mult = int(p[P_LONG])
-        shift_worst[:] = math.nan
         c_yaw = math.cos(yaw)
         s_yaw = math.sin(yaw)
         straight_yaw = _wrap_cs(c_yaw, s_yaw)
+        # the proximity cost of a child's motion is taken at its two ends (its sweep comes later, 1b)
+        here_margin = max(0.0, _pose_margin_at(clear, blocked, p, offx, offy, px, py, x, y, yaw, c_yaw, s_yaw))
         for d in range(2):
             direction = 1 if d == 0 else -1
             if direction < 0 and not allow_reverse:
@@ -697,16 +716,14 @@ def search_chunk(
                 ckey = _closed_key(p, w, cx, cy, cyaw, roll_bins[ri], n_roll_bins)
                 if closed[ckey >> 3] & (1 << (ckey & 7)):
                     continue
-                # the sweep of a roll change is the same forwards and backwards: done once per roll
-                if math.isnan(shift_worst[ri]):
-                    shift_worst[ri] = _shift_margin_at(clear, blocked, p, offx, offy, px, py, x, y, yaw, c_yaw, s_yaw,
-                                                       d_roll, math.inf)
-                if shift_worst[ri] < 0.0:
-                    continue
-                margin = _arc_margin_at(clear, blocked, p, offx, offy, px, py, x1, y1, yaw, c_yaw, s_yaw, curv,
-                                        s_child, shift_worst[ri])
+                # only the end pose now: the motion is swept when (if) the child is popped (1b)
+                if abs(curv) < STRAIGHT_EPS:
+                    margin = _pose_margin_at(clear, blocked, p, offx, offy, px, py, cx, cy, cyaw, c_yaw, s_yaw)
+                else:
+                    margin = _pose_margin_at(clear, blocked, p, offx, offy, px, py, cx, cy, cyaw, c2, s2)
                 if margin < 0.0:
                     continue
+                margin = min(margin, here_margin)
                 h = _heuristic(htab, rs, p, cx, cy, cyaw)
                 if not math.isfinite(h):
                     continue

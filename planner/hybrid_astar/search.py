@@ -19,10 +19,12 @@ The loop runs compiled (:mod:`planner.hybrid_astar.kernels`) in chunks; between 
 deadline, the iteration cap and cancellation, and grows the node storage.
 
 Algorithm outline (numbered like the compiled loop):
- 1. pop the cheapest open node; skip it if its (cell, yaw bin, roll) key is closed, else close it;
+ 1. pop the cheapest open node; skip it if its (cell, yaw bin, roll) key is closed; sweep its motion from its parent
+    (lazily: a child is checked only at its end pose when pushed) and drop it if that collides, else close it;
  2. goal test (after returning the roll to 0);
  3. analytic expansion: Dubins every max(1, h / ratio) expansions, Reeds–Shepp as above (3b, 3c);
- 4. expand children (each roll, forward and optionally reverse), collision-checked at ≤ half a cell;
+ 4. expand children (each roll, forward and optionally reverse), their end poses checked (the motion is swept at
+    ≤ half a cell when the child is popped, 1);
  5. cost them and push them.
 """
 
