@@ -14,6 +14,7 @@ None = no path), never assumed.
 
 from __future__ import annotations
 
+import json
 import math
 from dataclasses import dataclass
 from pathlib import Path
@@ -88,13 +89,18 @@ def _reach(blocked: np.ndarray, grid: OccupancyGrid, p: np.ndarray, u: np.ndarra
     return p + u * WALL_REACH_M
 
 
-def build_world(spec: WorldSpec, robot: RobotProfile) -> World:
-    """The known map and the true world of ``spec`` (see the module docstring)."""
-    known = load_any(spec.map)
+Segment = tuple[float, float, float, float, float]
+"""A hidden obstacle: the cells whose centres lie within ``half`` (m) of the segment (x0, y0)–(x1, y1)."""
+
+PINNED_PATH = Path(__file__).with_name("explore_worlds.json")
+"""The sweep's hidden obstacles as they were made (``python -m lab.explore_worlds --pin`` writes them): the
+worlds are data, so a change to the planner, which plans the routes they are put on, does not move them."""
+
+
+def route_segments(spec: WorldSpec, robot: RobotProfile, known: OccupancyGrid) -> list[Segment]:
+    """The hidden obstacles of ``spec`` made afresh: planned on the known map (with :data:`ROUTE_OPTIONS`) and put
+    on that route with the spec's seed (see the module docstring)."""
     rng = np.random.default_rng(spec.seed)
-    # the route the hidden obstacles are put on is planned with one step per expansion everywhere, as when the
-    # sweep was made: a door is put at the route's narrowest place, so a route found otherwise moves the door
-    # (bench-around-door: with long steps in the open, to where a detour remains) and the sweep's worlds with it
     route = HybridAStar(known, robot, ROUTE_OPTIONS).plan(spec.start, spec.goal, Termination(10.0)).states
     xy, s = route[:, :2], route[:, 6]
     total = float(s[-1])
@@ -103,8 +109,7 @@ def build_world(spec: WorldSpec, robot: RobotProfile) -> World:
     def away(p: np.ndarray) -> bool:
         return bool(np.hypot(*(ends - p).T).min() > KEEP_CLEAR_M + 1.0)
 
-    data = known.data.copy()
-    blocked = known.blocked()
+    out: list[Segment] = []
     if spec.kind == "boxes":
         for _ in range(int(rng.integers(1, 4))):
             for _try in range(50):
@@ -113,9 +118,8 @@ def build_world(spec: WorldSpec, robot: RobotProfile) -> World:
                 if away(centre):
                     break
             half = rng.uniform(0.4, 0.8, 2)
-            along = np.array([half[0], 0.0])
-            iy, ix = _segment_cells(known, centre - along, centre + along, float(half[1]))
-            data[iy, ix] = OCCUPIED
+            out.append((float(centre[0] - half[0]), float(centre[1]), float(centre[0] + half[0]), float(centre[1]),
+                        float(half[1])))
     elif spec.kind in ("aisle", "door"):
         lo, hi = np.searchsorted(s, 0.3 * total), np.searchsorted(s, 0.7 * total)
         candidates = [i for i in range(lo, max(lo + 1, hi)) if away(xy[i])] or [int((lo + hi) // 2)]
@@ -127,18 +131,59 @@ def build_world(spec: WorldSpec, robot: RobotProfile) -> World:
         yaw = float(route[i, 2])
         n = np.array([-math.sin(yaw), math.cos(yaw)])
         p = xy[i]
+        blocked = known.blocked()
         a, b = _reach(blocked, known, p, n), _reach(blocked, known, p, -n)
-        iy, ix = _segment_cells(known, a, b, 0.15)
-        data[iy, ix] = OCCUPIED
+        out.append((float(a[0]), float(a[1]), float(b[0]), float(b[1]), 0.15))
     else:
         raise ValueError(f"kind must be one of {KINDS}, got {spec.kind!r}")
+    return out
+
+
+def spec_key(spec: WorldSpec) -> dict[str, object]:
+    """What a pinned entry must match to be used: the map's file name, the problem, the kind and the seed."""
+    return {"map": Path(spec.map).name, "start": list(spec.start), "goal": list(spec.goal), "kind": spec.kind,
+            "seed": spec.seed}
+
+
+def pinned_segments(spec: WorldSpec, path: Path = PINNED_PATH) -> list[Segment] | None:
+    """The pinned hidden obstacles of ``spec`` (None when it has none, or the entry was made for another problem)."""
+    if not path.is_file():
+        return None
+    entry = json.loads(path.read_text()).get(spec.name)
+    if entry is None or entry["spec"] != json.loads(json.dumps(spec_key(spec))):
+        return None
+    return [(float(a), float(b), float(c), float(d), float(e)) for a, b, c, d, e in entry["segments"]]
+
+
+def build_world(spec: WorldSpec, robot: RobotProfile, pinned: bool = True) -> World:
+    """The known map and the true world of ``spec``: its pinned hidden obstacles (:data:`PINNED_PATH`), or with
+    ``pinned`` false or none pinned, ones made afresh on a route planned now (:func:`route_segments`)."""
+    known = load_any(spec.map)
+    segments = pinned_segments(spec) if pinned else None
+    if segments is None:
+        segments = route_segments(spec, robot, known)
+    data = known.data.copy()
+    for x0, y0, x1, y1, half in segments:
+        iy, ix = _segment_cells(known, np.array([x0, y0]), np.array([x1, y1]), half)
+        data[iy, ix] = OCCUPIED
     # never bury the start or the goal
-    for e in ends:
+    for e in np.array([spec.start[:2], spec.goal[:2]]):
         iy, ix = _segment_cells(known, e, e, KEEP_CLEAR_M)
         data[iy, ix] = known.data[iy, ix]
     true = OccupancyGrid(data, known.resolution_m, known.origin, known.occupied_threshold,
                          f"{known.name}-{spec.kind}-{spec.seed}")
     return World(spec, known, true, int(np.count_nonzero(data != known.data)))
+
+
+def pin(robot: RobotProfile, path: Path = PINNED_PATH) -> dict[str, object]:
+    """Make every sweep world's hidden obstacles afresh and write them to ``path``; returns what was written."""
+    out: dict[str, object] = {}
+    for spec in sweep_specs():
+        segments = route_segments(spec, robot, load_any(spec.map))
+        out[spec.name] = {"spec": spec_key(spec), "segments": [[round(v, 6) for v in seg] for seg in segments]}
+    lines = [f"{json.dumps(name)}: {json.dumps(entry)}" for name, entry in out.items()]  # one world per line
+    path.write_text("{\n" + ",\n".join(lines) + "\n}\n")
+    return out
 
 
 def true_length(world: World, robot: RobotProfile) -> float | None:
@@ -180,3 +225,13 @@ def sweep_specs() -> list[WorldSpec]:
         for kind in kinds:
             out.append(WorldSpec(f"{name}-{kind}", str(m / path), start, goal, kind, 100 + i))
     return out
+
+
+if __name__ == "__main__":  # python -m lab.explore_worlds --pin: make the sweep's hidden obstacles afresh and pin them
+    import sys
+
+    from planner.robot import load_robot
+
+    if sys.argv[1:] != ["--pin"]:
+        sys.exit("usage: python -m lab.explore_worlds --pin")
+    print(f"pinned {len(pin(load_robot()))} worlds in {PINNED_PATH}")
