@@ -32,6 +32,7 @@ from __future__ import annotations
 
 import logging
 import math
+import threading
 import time
 from collections import OrderedDict
 from collections.abc import Mapping
@@ -81,6 +82,7 @@ FORWARD_RETRY_MIN = 3_000  # ... at least this many
 FORWARD_RETRY_MAX = 20_000  # ... and at most this many (docs/planning.md: the budgets the accepted paths needed)
 FORWARD_RETRY_SHARE = 0.5  # ... tried when the path found rolls more than this share of its length backwards
 FORWARD_CHECK_BUDGET = 1_000  # ... unless a forward-only search from the goal exhausts within this many (a dead end)
+_LOOP = threading.local()  # seconds the current thread's plan spent in the compiled loop (extra.search_loop_s)
 CLOSED_SET_BUDGET_MB = 1024  # the closed-set bitset of one plan may not exceed this (≈ 6300² cells at defaults, tested)
 
 
@@ -281,7 +283,15 @@ class _Search:
         return int(self.counters[kernels.C_EXPANSIONS])
 
     def step(self, budget: int) -> int:
-        """Run up to ``budget`` expansions; returns the compiled loop's status (FULL is handled here)."""
+        """Run up to ``budget`` expansions; returns the compiled loop's status (FULL is handled here). Its time is
+        added to the current thread's plan's ``extra.search_loop_s``."""
+        t0 = time.perf_counter()
+        try:
+            return self._step(budget)
+        finally:
+            _LOOP.s = getattr(_LOOP, "s", 0.0) + time.perf_counter() - t0
+
+    def _step(self, budget: int) -> int:
         pl = self.planner
         while True:
             status = int(kernels.search_chunk(
@@ -444,6 +454,7 @@ class HybridAStar:
         starts after the one-off compilation (:func:`warm_up`), so the limit is the search's own.
         """
         warm_up()
+        _LOOP.s = 0.0
         clock = (termination or Termination()).start()
         t0 = clock.t0
         o = self.options
@@ -514,6 +525,8 @@ class HybridAStar:
         # issue 21's measure of how directly the search heads for the goal: all searches' expansions per metre
         # (None for a path of no length: the result is sent as JSON, which has no NaN)
         extra["expansions_per_m"] = expansions / length if length > 0 else None
+        # the time in the compiled search loop alone (every search of this plan), for expansions/s as Nav2 counts them
+        extra["search_loop_s"] = _LOOP.s
         elapsed = time.perf_counter() - t0
         return PlanResult(
             status="exact",

@@ -60,7 +60,7 @@ class RunRecord:
     may reverse); ``length_ratio`` = ``length_m`` / it. ``min_clearance_m``: the padded footprint's exact
     distance to the nearest blocked cell or map edge along the path (capped at 1 m); ``reported_clearance_m``:
     what sphereplan's result says. ``expansions``: sphereplan's, from the result or the failure message (−1
-    unknown).
+    unknown). ``search_loop_s``: of sphereplan's time, the part in its compiled search loop (NaN unknown).
     """
 
     map: str
@@ -88,6 +88,7 @@ class RunRecord:
     reverses: bool
     expansions: int
     message: str
+    search_loop_s: float = math.nan
 
 
 CSV_COLUMNS = tuple(f.name for f in fields(RunRecord))
@@ -96,7 +97,7 @@ CSV_COLUMNS = tuple(f.name for f in fields(RunRecord))
 def _record(problem: RealProblem, planner: str, status: str, time_s: float, time_limit_s: float, *,
             valid: bool = False, first_length_m: float = math.nan, length_m: float = math.nan,
             min_clearance_m: float = math.nan, reported_clearance_m: float = math.nan, reverses: bool = False,
-            expansions: int = -1, message: str = "") -> RunRecord:
+            expansions: int = -1, message: str = "", search_loop_s: float = math.nan) -> RunRecord:
     return RunRecord(
         map=problem.map_name, problem=problem.index, start_x=problem.start[0], start_y=problem.start[1],
         start_yaw=problem.start[2], goal_x=problem.goal[0], goal_y=problem.goal[1], goal_yaw=problem.goal[2],
@@ -104,7 +105,7 @@ def _record(problem: RealProblem, planner: str, status: str, time_s: float, time
         solved=status == "solved" and valid, time_s=time_s, time_limit_s=time_limit_s,
         first_length_m=first_length_m, length_m=length_m, reference_length_m=math.nan, length_ratio=math.nan,
         min_clearance_m=min_clearance_m, reported_clearance_m=reported_clearance_m, valid=valid,
-        reverses=reverses, expansions=expansions, message=message,
+        reverses=reverses, expansions=expansions, message=message, search_loop_s=search_loop_s,
     )
 
 
@@ -173,7 +174,7 @@ def run_sphereplan(problem: RealProblem, grid: OccupancyGrid, robot: RobotProfil
                    first_length_m=result.length_m, length_m=result.length_m,
                    min_clearance_m=checker.min_clearance(dense), reported_clearance_m=result.min_clearance_m,
                    reverses=bool((result.states[:, 4] < 0).any()), expansions=int(result.expansions),
-                   message=message)
+                   message=message, search_loop_s=float(result.extra.get("search_loop_s", math.nan)))
 
 
 def run_reference(problem: RealProblem, grid: OccupancyGrid, robot: RobotProfile, checker: FootprintReferee,

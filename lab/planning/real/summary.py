@@ -40,6 +40,7 @@ class MapSummary:
     ``length_ratio_*``: length ÷ the reference's best (final) length; ``first_ratio_median``: length ÷ the shortest
     BIT* first solution, ``longer_than_first``: the share of problems where sphereplan's path is longer than that;
     ``expansions_per_s``: sphereplan's expansions ÷ its time, summed over its solved problems;
+    ``loop_expansions_per_s``: the same ÷ the time in its compiled search loop alone (the rate Nav2 reports);
     ``expansions_per_m``: sphereplan's expansions ÷ its path's length, median over its solved problems (issue 21's
     measure of how directly the search heads for the goal where there is room); ``clearance_*``:
     medians over sphereplan's solved problems of the path's least clearance, true (polygon) and as reported.
@@ -75,6 +76,7 @@ class MapSummary:
     first_ratio_median: float
     longer_than_first: float
     expansions_per_s: float
+    loop_expansions_per_s: float
     expansions_per_m: float
     clearance_median_m: float
     reported_clearance_median_m: float
@@ -160,6 +162,7 @@ def _summary(name: str, records: list[RunRecord], checker: FootprintReferee | No
         else math.nan,
         expansions_per_s=(sum(r.expansions for r in solved if r.expansions > 0)
                           / max(sum(r.time_s for r in solved if r.expansions > 0), 1e-9)) if solved else math.nan,
+        loop_expansions_per_s=_loop_rate(solved),
         expansions_per_m=_median([r.expansions / r.length_m for r in solved if r.expansions > 0 and r.length_m > 0]),
         clearance_median_m=_median([r.min_clearance_m for r in solved]),
         reported_clearance_median_m=_median([r.reported_clearance_m for r in solved]),
@@ -188,10 +191,19 @@ TABLE_COLUMNS = (
     ("len med", "length ÷ reference best, median"), ("len max", "length ÷ reference best, max"),
     ("÷first", "length ÷ BIT*'s first solution, median"), (">first", "share longer than BIT*'s first solution"),
     ("exp/s", "sphereplan expansions per second of planning time (solved problems)"),
+    ("loop exp/s", "the same per second in the compiled search loop alone (as Nav2 counts them)"),
     ("exp/m", "sphereplan expansions per metre of its path, median (solved problems)"),
     ("clear m", "sphereplan's true footprint clearance, median"),
     ("rep m", "sphereplan's reported min_clearance_m, median"),
 )
+
+
+def _loop_rate(solved: Sequence[RunRecord]) -> float:
+    """Expansions per second of search-loop time over the solved runs that report it (NaN when none does)."""
+    known = [r for r in solved if r.expansions > 0 and math.isfinite(r.search_loop_s) and r.search_loop_s > 0]
+    if not known:
+        return math.nan
+    return sum(r.expansions for r in known) / sum(r.search_loop_s for r in known)
 
 
 def _fmt(value: float, digits: int = 2) -> str:
@@ -212,7 +224,7 @@ def format_real_table(summaries: Sequence[MapSummary]) -> str:
             _fmt(s.unsolved_time_p50_s, 3), _fmt(s.disconnected_time_max_s, 3), _fmt(s.length_ratio_median, 3),
             _fmt(s.length_ratio_max, 3),
             _fmt(s.first_ratio_median, 3), _fmt(s.longer_than_first, 2), _fmt(s.expansions_per_s, 0),
-            _fmt(s.expansions_per_m, 0),
+            _fmt(s.loop_expansions_per_s, 0), _fmt(s.expansions_per_m, 0),
             _fmt(s.clearance_median_m, 3), _fmt(s.reported_clearance_median_m, 3),
         ])
     head = [c[0] for c in TABLE_COLUMNS]

@@ -318,3 +318,22 @@ def test_summary_expansions_per_metre_is_the_median_over_solved_problems() -> No
     head, _, row = format_real_table([s]).splitlines()[:3]
     end = head.index("exp/m") + len("exp/m")  # the columns are right-aligned under their heads
     assert row[:end].split()[-1] == "25"
+
+
+def test_summary_loop_expansions_per_second_counts_the_search_loop_time_only() -> None:
+    """Issue 21: expansions ÷ the compiled loop's time (what Nav2 reports), beside ÷ the whole planning time."""
+    from lab.planning.real.summary import format_real_table
+
+    records = [
+        replace(_rec(0, SPHEREPLAN, "solved", 0.2, length=11.0, clear=0.3), expansions=3000, search_loop_s=0.02),
+        replace(_rec(1, SPHEREPLAN, "solved", 0.1, length=3.0, clear=0.3), expansions=1000, search_loop_s=0.02),
+        replace(_rec(2, SPHEREPLAN, "solved", 0.1, length=3.0, clear=0.3), expansions=500),  # loop time unknown
+        replace(_rec(3, SPHEREPLAN, "timeout", 5.0), expansions=9000, search_loop_s=5.0),  # not solved: left out
+    ]
+    grid = OccupancyGrid.from_occupied(_room(), 0.05, name="m")
+    (s,) = summarise(records, {"m": FootprintReferee.for_robot(grid, ROBOT)}, False, {}, {})
+    assert s.loop_expansions_per_s == pytest.approx(100_000.0)
+    assert s.expansions_per_s == pytest.approx(4500 / 0.4)
+    head, _, row = format_real_table([s]).splitlines()[:3]
+    end = head.index("loop exp/s") + len("loop exp/s")
+    assert row[:end].split()[-1] == "100000"

@@ -81,6 +81,14 @@ def test_expansions_per_metre_in_the_result(planner):
     assert here.length_m == 0.0 and here.extra["expansions_per_m"] is None
 
 
+def test_search_loop_time_in_the_result(planner):
+    """extra["search_loop_s"]: the part of the planning time spent in the compiled loop (every search of the plan)."""
+    result = planner.plan((2, 2, 0), (18, 18, math.pi / 2))
+    assert 0.0 < result.extra["search_loop_s"] < result.planning_time_s
+    here = planner.plan((2, 2, 0), (2, 2, 0))  # a new plan starts from zero
+    assert here.extra["search_loop_s"] < result.extra["search_loop_s"]
+
+
 def test_same_input_same_path(planner):
     a = planner.plan((2, 2, 0), (18, 18, 1.0))
     b = planner.plan((2, 2, 0), (18, 18, 1.0))
