@@ -1,10 +1,12 @@
 """Heuristics of the spherical Hybrid A* (paper 001 eq. 14g–i).
 
-* Holonomic cost-to-go with obstacles (eq. 14g): Dijkstra from the goal over a grid (optionally
+* Holonomic cost-to-go with obstacles (eq. 14g): a wavefront from the goal over a grid (optionally
   downsampled, as Nav2's Smac planner does) where a cell is passable when the robot's centre could be
   there, and each step costs its length × (1 + w·proximity), the same travel cost the search charges.
   16-connected moves keep the grid metric within 2.7 % of Euclidean; the result is divided by that
-  factor and reduced by one coarse-cell diagonal, so it never exceeds the true cost (tested).
+  factor and reduced by two coarse-cell diagonals, so it never exceeds the true cost (tested). Given the
+  start, the wavefront is an A* towards it and computes exactly only the part around the way between them
+  (:func:`_wavefront16`); elsewhere the table holds a lower bound.
 * Dubins distance without obstacles (eq. 14h): :func:`planner.hybrid_astar.dubins.dubins_distance` at the robot's
   minimum turning radius.
 
@@ -14,6 +16,7 @@
 from __future__ import annotations
 
 import math
+import weakref
 from collections import OrderedDict
 from typing import TYPE_CHECKING
 
@@ -22,11 +25,18 @@ from numba import njit
 
 from planner.errors import PlannerCancelled, PlannerTimedOut
 from planner.hybrid_astar.dubins import dubins_shortest
-from planner.hybrid_astar.heap import heap_pop, heap_push
 from planner.hybrid_astar.reeds_shepp import MAX_SEGS, MAX_WORDS, rs_words, word_cost
 
 if TYPE_CHECKING:
     from planner.termination import Clock
+
+# The wavefront towards a start stops where cost + distance to the start exceeds this × the start's cost + margin
+# (measured on the 60 real-map problems: every expansion and path as with the full table; 1.2 changes a few).
+STOP_FACTOR = 1.3
+STOP_MARGIN_M = 2.0
+# The same for the goal side's tables (towards the start; guided by the forward table, so the part computed
+# exactly is the ellipse cost from the start + cost to the goal < bound): 1.2 changes no expansion or path there.
+GOAL_SIDE_STOP_FACTOR = 1.2
 
 # Worst-case ratio of the 16-connected grid metric to Euclidean distance.
 SIXTEEN_CONNECTED_RATIO = 1.0 / math.cos(math.atan2(1.0, 2.0) / 2.0)
@@ -76,86 +86,180 @@ def _block_max(clearance: np.ndarray, factor: int) -> np.ndarray:
     return out
 
 
-@njit(cache=True)
-def _dijkstra16(mult: np.ndarray, gx: int, gy: int, cell_m: float, sx: int, sy: int, stop_factor: float) -> np.ndarray:
-    """Cost-to-go from cell (gx, gy). Once the start cell (sx, sy) is settled at d_s, the wavefront stops
-    at stop_factor·d_s + 4 cells: every cell not settled by then gets the last settled cost, a lower
-    bound of its own, so the table stays admissible while the far side of a large map is skipped.
+_BUCKETS_A_CELL = 4  # the wavefront's queue: buckets a quarter of a cell wide (fewer cells come out of order)
+_RING = 256  # buckets in flight (a step reaching further is filed again when due)
 
-    Run once per new goal, inside the plan's time: the passability of every cell, each move's length factor
-    and the cells a knight move passes are looked up, not recomputed per move, and the heap starts at one
-    entry per cell and grows when needed (it was sized for the worst case, 16 per cell). The pushes and pops
-    are the same, in the same order, so the table is the same to the bit."""
+
+@njit(cache=True)
+def _wavefront16(mult: np.ndarray, gx: int, gy: int, cell_m: float, sx: int, sy: int, stop_factor: float,
+                 stop_margin_m: float, scale: float, slack: float, guide: np.ndarray
+                 ) -> tuple[np.ndarray, np.ndarray, float]:
+    """Cost-to-go from cell (gx, gy) over the 16-connected grid, returned as the heuristic table
+    max(cost × ``scale`` − ``slack``, 0) (inf where impassable or unreachable), with the counts (cells expanded,
+    queue entries pushed) and the bound B of the part computed exactly (inf when all of it was).
+
+    With a start cell (sx, sy) the wavefront is an A* towards it: cells come out in order of cost + e(cell), e the
+    straight distance between cell centres to the start (a lower bound of the cost, consistent: a step costs at
+    least its length). Once the start is reached at cost d_s it stops at B ≈ stop_factor·d_s + ``stop_margin_m``:
+    every cell with cost + e < B has its exact cost, and every other cell costs at least B − e (its cheapest
+    path leaves the exact part through a cell of cost + e ≥ B), which the table holds there. The exact part is an
+    ellipse-like region around the start and the goal, not the disc of radius B around the goal, so far less
+    of a large map is computed; a node of a search from the start lying beyond it has g + h ≥ about B.
+
+    ``guide`` (shape (0, 0) for none), a table towards the start's cell (the forward table, for the goal side's
+    table towards the start), is a lower bound of the cost to the start and consistent like e: e is then the larger
+    of the two, and the exact part shrinks to about cost from the goal + cost to the start < B. Cells the guide
+    cannot reach the start from are left out (inf).
+
+    The queue is bucketed (Dial's) by cost + e, a quarter of a cell wide: O(1) a push. Cells of one bucket come out
+    in any order, so a cell may be reached more cheaply after it was expanded: it is then queued and expanded again
+    (label-correcting), and a cell's value is taken as the smaller of its cost found and B − e, so the table
+    never exceeds the true cost. Work (pops, pushes, neighbour looks) is in proportion to the cells expanded;
+    the grid as a whole is only allocated and filled."""
     h, w = mult.shape
-    dist = np.full((h, w), np.inf)
-    if not (0 <= gx < w and 0 <= gy < h) or not np.isfinite(mult[gy, gx]):
-        return dist
+    n = h * w
+    flat = mult.ravel()
+    table = np.full(n, np.inf)  # the cost found so far (raw) until the last pass makes it the table
+    counts = np.zeros(2, dtype=np.int64)
+    if not (0 <= gx < w and 0 <= gy < h) or not flat[gy * w + gx] < np.inf:
+        return table.reshape(h, w), counts, math.inf
     n_moves = _MOVES.shape[0]
-    # per move: (length × cell × ½) as the step below multiplies it, and the two cells a diagonal or knight
-    # move passes (offsets from the cell left; both the target for a straight move)
+    # per move: (length × cell × ½) as the step below multiplies it, its flat offset, and those of the two cells a
+    # diagonal or knight move passes (both its target for a straight move), looked at only when the step improves
     coef = np.empty(n_moves)
-    pass_a = np.empty((n_moves, 2), dtype=np.int64)
-    pass_b = np.empty((n_moves, 2), dtype=np.int64)
+    off = np.empty(n_moves, dtype=np.int64)
+    off_a = np.empty(n_moves, dtype=np.int64)
+    off_b = np.empty(n_moves, dtype=np.int64)
     for k in range(n_moves):
         mx = _MOVES[k, 0]
         my = _MOVES[k, 1]
         coef[k] = math.sqrt(mx * mx + my * my) * cell_m * 0.5
+        off[k] = my * w + mx
         if abs(mx) + abs(my) == 3:
-            pass_a[k, 0] = mx // 2 if abs(mx) == 2 else 0
-            pass_a[k, 1] = my // 2 if abs(my) == 2 else 0
-            pass_b[k, 0] = mx if abs(mx) == 1 else mx // 2
-            pass_b[k, 1] = my if abs(my) == 1 else my // 2
+            ax = mx // 2 if abs(mx) == 2 else 0
+            ay = my // 2 if abs(my) == 2 else 0
+            bx = mx if abs(mx) == 1 else mx // 2
+            by = my if abs(my) == 1 else my // 2
         elif abs(mx) + abs(my) == 2:
-            pass_a[k, 0], pass_a[k, 1] = mx, 0
-            pass_b[k, 0], pass_b[k, 1] = 0, my
+            ax, ay, bx, by = mx, 0, 0, my
         else:
-            pass_a[k, 0], pass_a[k, 1] = mx, my
-            pass_b[k, 0], pass_b[k, 1] = mx, my
-    passable = np.empty((h, w), dtype=np.bool_)
-    for iy in range(h):
-        for ix in range(w):
-            passable[iy, ix] = np.isfinite(mult[iy, ix])
-    cap = h * w + 16
-    keys = np.empty(cap)
-    vals = np.empty(cap, dtype=np.int64)
-    size = np.zeros(1, dtype=np.int64)
-    dist[gy, gx] = 0.0
-    heap_push(keys, vals, size, 0.0, gy * w + gx)
-    done = np.zeros((h, w), dtype=np.bool_)
+            ax, ay, bx, by = mx, my, mx, my
+        off_a[k] = ay * w + ax
+        off_b[k] = by * w + bx
+    directed = 0 <= sx < w and 0 <= sy < h
+    guided = directed and guide.shape == mult.shape
+    to_start = guide.ravel()
+    width = cell_m / _BUCKETS_A_CELL
+    inv = 1.0 / width
+    mask = _RING - 1
+    head = np.full(_RING, -1, dtype=np.int64)
+    # queue entries (cell, its cost and key when queued, the next entry of its bucket) in a pool with a free list
+    cap = 1024
+    ent_cell = np.empty(cap, dtype=np.int64)
+    ent_cost = np.empty(cap)
+    ent_key = np.empty(cap)
+    ent_next = np.empty(cap, dtype=np.int64)
+    g = gy * w + gx
+    table[g] = 0.0
+    ent_cell[0] = g
+    ent_cost[0] = 0.0
+    ent_key[0] = cell_m * math.sqrt(float((gx - sx) ** 2 + (gy - sy) ** 2)) if directed else 0.0
+    if guided:
+        ent_key[0] = max(ent_key[0], to_start[g])
+    cur = int(ent_key[0] * inv)
+    ent_next[0] = -1
+    head[cur & mask] = 0
+    used = 1
+    free = -1
+    queued = 1
     stop = math.inf
-    d = 0.0
-    while size[0] > 0:
-        d, idx = heap_pop(keys, vals, size)
-        cy = idx // w
-        cx = idx - cy * w
-        if done[cy, cx]:
+    while queued > 0:
+        slot = cur & mask
+        e = head[slot]
+        if e < 0:
+            cur += 1
+            if cur * width > stop:
+                break
             continue
-        if d > stop:
-            break
-        done[cy, cx] = True
-        if cx == sx and cy == sy:
-            stop = stop_factor * d + 4.0 * cell_m
-        here = mult[cy, cx]
-        if size[0] + n_moves > keys.size:  # each settled cell pushes at most one entry per move
-            keys = np.concatenate((keys, np.empty(keys.size)))
-            vals = np.concatenate((vals, np.empty(vals.size, dtype=np.int64)))
+        head[slot] = ent_next[e]
+        c = ent_cell[e]
+        d = ent_cost[e]
+        if d == table[c]:
+            due = int(ent_key[e] * inv)
+            if due > cur:  # filed early (its step reached beyond the ring): file it again
+                due = min(due, cur + _RING - 1)
+                ent_next[e] = head[due & mask]
+                head[due & mask] = e
+                continue
+        ent_next[e] = free
+        free = e
+        queued -= 1
+        if d != table[c]:  # reached more cheaply since it was queued
+            continue
+        counts[0] += 1
+        cy = c // w
+        cx = c - cy * w
+        if cx == sx and cy == sy and stop == math.inf:
+            stop = stop_factor * d + stop_margin_m
+        if queued + n_moves > cap:  # room for one entry a move
+            ent_cell = np.concatenate((ent_cell, np.empty(cap, dtype=np.int64)))
+            ent_cost = np.concatenate((ent_cost, np.empty(cap)))
+            ent_key = np.concatenate((ent_key, np.empty(cap)))
+            ent_next = np.concatenate((ent_next, np.empty(cap, dtype=np.int64)))
+            cap *= 2
+        here = flat[c]
+        interior = 2 <= cx < w - 2 and 2 <= cy < h - 2
         for k in range(n_moves):
-            nx = cx + _MOVES[k, 0]
-            ny = cy + _MOVES[k, 1]
-            if nx < 0 or ny < 0 or nx >= w or ny >= h or done[ny, nx] or not passable[ny, nx]:
-                continue
-            if not (passable[cy + pass_a[k, 1], cx + pass_a[k, 0]] and passable[cy + pass_b[k, 1], cx + pass_b[k, 0]]):
-                continue
-            nd = d + coef[k] * (mult[ny, nx] + here)
-            if nd < dist[ny, nx]:
-                dist[ny, nx] = nd
-                heap_push(keys, vals, size, nd, ny * w + nx)
-    if size[0] > 0:
-        for iy in range(h):
-            for ix in range(w):
-                if not done[iy, ix] and passable[iy, ix]:
-                    dist[iy, ix] = d
-    return dist
+            if not interior:
+                nx = cx + _MOVES[k, 0]
+                ny = cy + _MOVES[k, 1]
+                if nx < 0 or ny < 0 or nx >= w or ny >= h:
+                    continue
+            nb = c + off[k]
+            nd = d + coef[k] * (flat[nb] + here)
+            if nd < table[nb] and flat[c + off_a[k]] < np.inf and flat[c + off_b[k]] < np.inf:
+                key = nd
+                if directed:
+                    ex = cx + _MOVES[k, 0] - sx
+                    ey = cy + _MOVES[k, 1] - sy
+                    lower = cell_m * math.sqrt(float(ex * ex + ey * ey))
+                    if guided:
+                        if not to_start[nb] < np.inf:  # no way from there to the start
+                            continue
+                        lower = max(lower, to_start[nb])
+                    key += lower
+                table[nb] = nd
+                b = min(max(int(key * inv), cur), cur + _RING - 1)
+                if free >= 0:
+                    e = free
+                    free = ent_next[e]
+                else:
+                    e = used
+                    used += 1
+                ent_cell[e] = nb
+                ent_cost[e] = nd
+                ent_key[e] = key
+                ent_next[e] = head[b & mask]
+                head[b & mask] = e
+                queued += 1
+                counts[1] += 1
+    bound = cur * width if queued > 0 else math.inf  # every key left in the queue is at least this
+    for i in range(n):
+        if flat[i] < np.inf:
+            v = table[i]
+            if bound < math.inf:
+                iy = i // w
+                ix = i - iy * w
+                lower = cell_m * math.sqrt(float((ix - sx) ** 2 + (iy - sy) ** 2))
+                if guided:
+                    lower = max(lower, to_start[i])
+                v = min(v, bound - lower)
+            if v < np.inf:
+                table[i] = max(v * scale - slack, 0.0)
+    return table.reshape(h, w), counts, bound
+
+
+_NO_GUIDE = np.zeros((0, 0))
 
 
 _RS_TABLES: OrderedDict[tuple[float, int, float, float, float, float], np.ndarray] = OrderedDict()
@@ -274,28 +378,62 @@ class HolonomicHeuristic:
     origin_xy : the grid's origin (m).
     cell_m : coarse cell size (m) = fine resolution × downsampling factor.
     goal_xy : goal position (m).
-    start_xy : when given, the wavefront stops at ``stop_factor`` × the start's cost (+ 4 cells); cells
-        beyond get that cost as a lower bound. Nodes that far away have f = g + h·(1 + greed) above the
-        goal's, so the search never needs their exact value.
+    start_xy : when given, the wavefront is an A* towards it and stops once cost + straight distance to the
+        start exceeds ``stop_factor`` × the start's cost + ``stop_margin_m`` (:func:`_wavefront16`); every cell
+        beyond holds a lower bound (that bound less its distance to the start). A node there has g + h at least
+        about that bound, above the goal's f, so the search never needs its exact value (on the 60 real-map
+        problems 1.3 × + 2 m leaves every expansion as it was with the full table).
+    guide : a table towards the start's cell (same grid), a tighter lower bound of the cost to the start than
+        the straight distance (:func:`_wavefront16`); held weakly for :meth:`covers`.
+
+    :attr:`expanded` and :attr:`pushes` count the wavefront's work; :meth:`covers` says whether the table is
+    exact along the cheapest way from another start (a cached table's reuse).
     """
 
     def __init__(self, mult: np.ndarray, origin_xy: tuple[float, float], cell_m: float,
                  goal_xy: tuple[float, float], start_xy: tuple[float, float] | None = None,
-                 stop_factor: float = 2.0) -> None:
+                 stop_factor: float = STOP_FACTOR, stop_margin_m: float = STOP_MARGIN_M,
+                 guide: np.ndarray | None = None) -> None:
         self.cell_m = cell_m
         self.origin_xy = origin_xy
         gx = math.floor((goal_xy[0] - origin_xy[0]) / cell_m)
         gy = math.floor((goal_xy[1] - origin_xy[1]) / cell_m)
         sx, sy = (-1, -1) if start_xy is None else (math.floor((start_xy[0] - origin_xy[0]) / cell_m),
                                                      math.floor((start_xy[1] - origin_xy[1]) / cell_m))
-        raw = _dijkstra16(mult, gx, gy, cell_m, sx, sy, stop_factor)
         # Within one coarse cell the grid knows nothing: allow a diagonal of slack at each end, and
         # undo the 16-connected metric's overestimate of Euclidean length.
         slack = 2.0 * math.sqrt(2.0) * cell_m
-        self.table = np.maximum(raw / SIXTEEN_CONNECTED_RATIO - slack, 0.0)
-        finite = self.table[np.isfinite(self.table)]
-        #: values at or above this are the wavefront's cut-off plateau (a lower bound, not the cost-to-go)
-        self.cutoff = float(finite.max()) if start_xy is not None and finite.size else math.inf
+        guided = guide is not None and guide.shape == mult.shape
+        self.table, counts, self.bound = _wavefront16(
+            np.ascontiguousarray(mult), gx, gy, cell_m, sx, sy, stop_factor, stop_margin_m,
+            1.0 / SIXTEEN_CONNECTED_RATIO, slack, guide if guide is not None and guided else _NO_GUIDE)
+        # held weakly: a cached table does not keep another alive (covers() answers no once it is gone)
+        self._guide = weakref.ref(guide) if guide is not None and guided else None
+        self._scale, self._slack, self._start_cell = 1.0 / SIXTEEN_CONNECTED_RATIO, slack, (sx, sy)
+        #: cells the wavefront expanded and queue entries it pushed (its work; the rest of the grid is only filled)
+        self.expanded, self.pushes = int(counts[0]), int(counts[1])
+
+    def covers(self, start_xy: tuple[float, float]) -> bool:
+        """The cheapest way from ``start_xy`` to the goal lies in the part computed exactly: every cell z on it
+        has cost(z) + e(z) ≤ cost(start) + e(start) (e the straight distance to the table's own start), below
+        the bound."""
+        if not math.isfinite(self.bound):
+            return True
+        ix = math.floor((start_xy[0] - self.origin_xy[0]) / self.cell_m)
+        iy = math.floor((start_xy[1] - self.origin_xy[1]) / self.cell_m)
+        h, w = self.table.shape
+        if not (0 <= ix < w and 0 <= iy < h) or not math.isfinite(self.table[iy, ix]):
+            return False
+        # the cost there (at most: below a value of 0 it is anywhere under the slack); beyond the exact part the
+        # table holds bound − e, so the test fails there
+        cost = (float(self.table[iy, ix]) + self._slack) / self._scale
+        e = self.cell_m * math.hypot(ix - self._start_cell[0], iy - self._start_cell[1])
+        if self._guide is not None:
+            guide = self._guide()
+            if guide is None:
+                return False
+            e = max(e, float(guide[iy, ix]))
+        return cost + e < self.bound - self.cell_m
 
     def __call__(self, x: float, y: float) -> float:
         ix = math.floor((x - self.origin_xy[0]) / self.cell_m)

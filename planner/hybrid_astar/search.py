@@ -55,7 +55,14 @@ from planner.errors import (
 from planner.hybrid_astar import kernels, meet
 from planner.hybrid_astar.anytime import MAX_IMPROVE_S, improve
 from planner.hybrid_astar.dubins import dubins_distance
-from planner.hybrid_astar.heuristics import HolonomicHeuristic, auto_downsample, coarse_cost_grid, reeds_shepp_table
+from planner.hybrid_astar.heuristics import (
+    GOAL_SIDE_STOP_FACTOR,
+    STOP_FACTOR,
+    HolonomicHeuristic,
+    auto_downsample,
+    coarse_cost_grid,
+    reeds_shepp_table,
+)
 from planner.hybrid_astar.two_ended import GoalSide, goal_side_possible
 from planner.kinematics import densify_motions, motion_knots, subdivide, wrap
 from planner.maps.clearance import CircleFootprint, ClearanceMap, inscribed_radius
@@ -360,23 +367,28 @@ class HybridAStar:
                                                max(o.proximity_range_m, robot.preferred_clearance_m), o.cost_penalty,
                                                self.heuristic_factor)
 
-    def holonomic(self, goal_xy: tuple[float, float], start_xy: tuple[float, float] | None = None
-                  ) -> HolonomicHeuristic:
-        """The holonomic cost-to-go table towards ``goal_xy`` (eq. 14g), cut off beyond twice the start's
-        cost when ``start_xy`` is given.
+    def holonomic(self, goal_xy: tuple[float, float], start_xy: tuple[float, float] | None = None,
+                  stop_factor: float = STOP_FACTOR) -> HolonomicHeuristic:
+        """The holonomic cost-to-go table towards ``goal_xy`` (eq. 14g), computed exactly only around the way to
+        ``start_xy`` when it is given (:class:`HolonomicHeuristic`, ``stop_factor`` its extent). A cached table
+        towards the start's cell (the forward one, when this is the goal side's table towards the start) guides
+        the wavefront: it is a lower bound of the cost to the start, tighter than the straight distance.
 
         Tables are cached per goal cell (Nav2 caches its obstacle heuristic the same way): a replan towards
-        the same goal reuses the table when its start lies inside the part the wavefront settled (any
-        table is admissible everywhere; beyond the cut-off it is only less informed).
+        the same goal reuses the table when it is exact along the new start's cheapest way (any table is
+        admissible everywhere; beyond its exact part it is only less informed).
         """
         cell = self.grid.resolution_m * self.heuristic_factor
         ox, oy = self.clearance.origin_x, self.clearance.origin_y
         key = (math.floor((goal_xy[0] - ox) / cell), math.floor((goal_xy[1] - oy) / cell))
         cached = self._heuristics.get(key)
-        if cached is not None and (start_xy is None or cached(*start_xy) < cached.cutoff):
+        if cached is not None and (start_xy is None or cached.covers(start_xy)):
             self._heuristics.move_to_end(key)
             return cached
-        heur = HolonomicHeuristic(self.holonomic_mult, (ox, oy), cell, goal_xy, start_xy)
+        towards_start = None if start_xy is None else self._heuristics.get(
+            (math.floor((start_xy[0] - ox) / cell), math.floor((start_xy[1] - oy) / cell)))
+        heur = HolonomicHeuristic(self.holonomic_mult, (ox, oy), cell, goal_xy, start_xy, stop_factor,
+                                  guide=None if towards_start is None else towards_start.table)
         self._heuristics[key] = heur
         while len(self._heuristics) > HEURISTIC_CACHE_SIZE:
             self._heuristics.popitem(last=False)
@@ -702,7 +714,7 @@ class HybridAStar:
         back_goal = (start[0], start[1], wrap(start[2] + flip))
         if self.footprint_margin(back_start) < 0:
             return None
-        heur = self.holonomic(back_goal[:2], back_start[:2])
+        heur = self.holonomic(back_goal[:2], back_start[:2], GOAL_SIDE_STOP_FACTOR)
         run = _Search(self, back_start, back_goal, heur, o, reverse)
         exhausted = None
         while run.expansions < budget and not clock.expired():

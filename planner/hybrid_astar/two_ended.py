@@ -31,6 +31,7 @@ from typing import Any
 import numpy as np
 
 from planner.hybrid_astar import kernels
+from planner.hybrid_astar.heuristics import GOAL_SIDE_STOP_FACTOR
 from planner.hybrid_astar.meet import Meeting
 from planner.hybrid_astar.reeds_shepp import MAX_SHOT_M
 from planner.kinematics import wrap
@@ -84,7 +85,7 @@ class GoalSide:
         self.goal = goal
         self.back_start = (goal[0], goal[1], wrap(goal[2] + math.pi))
         self.back_goal = (start[0], start[1], wrap(start[2] + math.pi))
-        heur = planner.holonomic(self.back_goal[:2], self.back_start[:2])
+        heur = planner.holonomic(self.back_goal[:2], self.back_start[:2], GOAL_SIDE_STOP_FACTOR)
         self.run = new_search(planner, self.back_start, self.back_goal, heur, o, planner.reverse)
         self.motions: list[Motion] | None = None
         self.exhausted = False

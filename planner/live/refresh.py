@@ -12,7 +12,7 @@ Those (R grown by ``C``) are recomputed from a distance transform over R grown b
 ``C`` of them lies inside it) and capped again. The result is min(true clearance, ``C``) everywhere, exactly
 what a rebuilt planner holds after the same cap, so a refreshed planner plans as a rebuilt one. The coarse
 multipliers are rebuilt on the coarse cells over the recomputed cells and the cached heuristic tables are
-dropped (the goal's wavefront is recomputed on the next plan, cut off at twice the start's cost as usual).
+dropped (the goal's wavefront is recomputed on the next plan, exact around the way to the start as usual).
 
 The guide of :mod:`planner.live.guide` (the same multipliers with the gaps the robot cannot roll through
 closed) is patched on the same coarse cells.

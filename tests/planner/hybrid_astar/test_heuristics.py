@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from scipy.spatial import ConvexHull
 
-from planner.hybrid_astar.heuristics import HolonomicHeuristic
+from planner.hybrid_astar.heuristics import SIXTEEN_CONNECTED_RATIO, HolonomicHeuristic
 from planner.hybrid_astar.search import HybridAStar, PlannerOptions
 from planner.occupancy import OccupancyGrid
 from planner.robot import load_robot
@@ -82,14 +82,20 @@ def test_cut_off_wavefront_is_a_lower_bound_of_the_full_one():
     goal, start = (3.0, 3.0), (6.0, 4.0)
     origin, cell = (planner.clearance.origin_x, planner.clearance.origin_y), 0.05 * planner.heuristic_factor
     full = HolonomicHeuristic(planner.holonomic_mult, origin, cell, goal).table
-    cut = HolonomicHeuristic(planner.holonomic_mult, origin, cell, goal, start).table
+    heur = HolonomicHeuristic(planner.holonomic_mult, origin, cell, goal, start)
+    cut = heur.table
     finite = np.isfinite(full)
     assert np.all(cut[finite] <= full[finite] + 1e-9)
     assert np.isfinite(cut[finite]).all()
-    h_start = HolonomicHeuristic(planner.holonomic_mult, origin, cell, goal, start)(*start)
-    near = full <= 1.5 * h_start
+    # exact wherever cost + distance to the start's cell stays below the bound (the A*'s ellipse)
+    sx, sy = (math.floor((start[0] - origin[0]) / cell), math.floor((start[1] - origin[1]) / cell))
+    iy, ix = np.indices(full.shape)
+    raw = (full + 2.0 * math.sqrt(2.0) * cell) * SIXTEEN_CONNECTED_RATIO
+    near = finite & (full > 0) & (raw + cell * np.hypot(ix - sx, iy - sy) < heur.bound - cell)
+    assert near.sum() > 500
     assert np.allclose(cut[near], full[near])
     assert (cut < full - 1e-6).any()  # the far side really was cut off
+    assert heur.expanded < 0.5 * np.isfinite(planner.holonomic_mult).sum()
 
 
 def test_reeds_shepp_table_never_exceeds_ompl():
@@ -190,9 +196,11 @@ def test_holonomic_tables_are_cached_per_goal_and_replaced_when_the_start_is_bey
     goal = (18.0, 5.0)
     near = planner.holonomic(goal, (15.0, 5.0))
     assert planner.holonomic((18.01, 5.0), (15.5, 4.0)) is near  # same goal cell, start inside the settled part
-    assert near(1.0, 5.0) == near.cutoff  # the far end of the map lies beyond the cut-off plateau
+    assert near.covers((15.5, 4.0)) and not near.covers((1.0, 5.0))  # the far end lies beyond the exact part
+    assert near(1.0, 5.0) < 12.0  # only a lower bound there
     far = planner.holonomic(goal, (1.0, 5.0))
-    assert far is not near and far(1.0, 5.0) < far.cutoff
+    assert far is not near and far.covers((1.0, 5.0))
+    assert planner.holonomic(goal, (1.0, 5.0)) is far
     assert far(1.0, 5.0) > near(1.0, 5.0)  # better informed there, and still a lower bound of the true cost
     assert far(1.0, 5.0) <= 17.0
 
