@@ -17,7 +17,7 @@ DOCUMENTED_COLUMNS = (
     "map", "problem", "start_x", "start_y", "start_yaw", "goal_x", "goal_y", "goal_yaw", "distance_m",
     "disconnected", "planner", "status", "solved", "time_s", "time_limit_s", "first_length_m", "length_m",
     "reference_length_m", "length_ratio", "min_clearance_m", "reported_clearance_m", "valid", "reverses",
-    "expansions", "message",
+    "expansions", "message", "search_loop_s",
 )
 
 
