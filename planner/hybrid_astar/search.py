@@ -89,7 +89,7 @@ FORWARD_RETRY_MIN = 3_000  # ... at least this many
 FORWARD_RETRY_MAX = 20_000  # ... and at most this many (docs/planning.md: the budgets the accepted paths needed)
 FORWARD_RETRY_SHARE = 0.5  # ... tried when the path found rolls more than this share of its length backwards
 FORWARD_CHECK_BUDGET = 1_000  # ... unless a forward-only search from the goal exhausts within this many (a dead end)
-_LOOP = threading.local()  # seconds the current thread's plan spent in the compiled loop (extra.search_loop_s)
+_LOOP = threading.local()  # seconds the current thread's plan spent in the compiled loop (extra.search_loop_time_s)
 CLOSED_SET_BUDGET_MB = 1024  # the closed-set bitset of one plan may not exceed this (≈ 6300² cells at defaults, tested)
 SMOOTH_RECHECK = 3  # smoothing's later passes: a target whose shot failed just before is retried every this many knots
 SMOOTH_RECHECK_FIRST = 2  # ... and in its first pass (on the search's own motions)
@@ -293,7 +293,7 @@ class _Search:
 
     def step(self, budget: int) -> int:
         """Run up to ``budget`` expansions; returns the compiled loop's status (FULL is handled here). Its time is
-        added to the current thread's plan's ``extra.search_loop_s``."""
+        added to the current thread's plan's ``extra.search_loop_time_s``."""
         t0 = time.perf_counter()
         try:
             return self._step(budget)
@@ -540,7 +540,7 @@ class HybridAStar:
         # (None for a path of no length: the result is sent as JSON, which has no NaN)
         extra["expansions_per_m"] = expansions / length if length > 0 else None
         # the time in the compiled search loop alone (every search of this plan), for expansions/s as Nav2 counts them
-        extra["search_loop_s"] = _LOOP.s
+        extra["search_loop_time_s"] = _LOOP.s
         elapsed = time.perf_counter() - t0
         return PlanResult(
             status="exact",

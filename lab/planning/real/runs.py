@@ -174,7 +174,7 @@ def run_sphereplan(problem: RealProblem, grid: OccupancyGrid, robot: RobotProfil
                    first_length_m=result.length_m, length_m=result.length_m,
                    min_clearance_m=checker.min_clearance(dense), reported_clearance_m=result.min_clearance_m,
                    reverses=bool((result.states[:, 4] < 0).any()), expansions=int(result.expansions),
-                   message=message, search_loop_s=float(result.extra.get("search_loop_s", math.nan)))
+                   message=message, search_loop_s=float(result.extra.get("search_loop_time_s", math.nan)))
 
 
 def run_reference(problem: RealProblem, grid: OccupancyGrid, robot: RobotProfile, checker: FootprintReferee,
