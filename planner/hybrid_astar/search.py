@@ -89,7 +89,8 @@ FORWARD_RETRY_MIN = 3_000  # ... at least this many
 FORWARD_RETRY_MAX = 20_000  # ... and at most this many (docs/planning.md: the budgets the accepted paths needed)
 FORWARD_RETRY_SHARE = 0.5  # ... tried when the path found rolls more than this share of its length backwards
 FORWARD_CHECK_BUDGET = 1_000  # ... unless a forward-only search from the goal exhausts within this many (a dead end)
-_LOOP = threading.local()  # seconds the current thread's plan spent in the compiled loop (extra.search_loop_time_s)
+_LOOP = threading.local()  # the current thread's plan: its clock, its seconds in the compiled loop (search_loop_time_s)
+GROWTH_MARGIN = 2.5  # a search's storage grows only when this × its last growth's time still fits before the deadline
 CLOSED_SET_BUDGET_MB = 1024  # the closed-set bitset of one plan may not exceed this (≈ 6300² cells at defaults, tested)
 SMOOTH_RECHECK = 3  # smoothing's later passes: a target whose shot failed just before is retried every this many knots
 SMOOTH_RECHECK_FIRST = 2  # ... and in its first pass (on the search's own motions)
@@ -278,6 +279,7 @@ class _Search:
         self.heap_keys = np.empty(cap * 2)
         self.heap_vals = np.empty(cap * 2, dtype=np.int64)
         self.heap_size = np.zeros(1, dtype=np.int64)
+        self.grow_s = 0.0  # how long the node storage's last growth took (s)
         self.counters = np.zeros(kernels.N_COUNTERS, dtype=np.int64)
         self.counters[kernels.C_TRIED] = -1
         # the shot found (first half) and a shot held back (second half, kernels.search_chunk 3c)
@@ -312,10 +314,21 @@ class _Search:
             ))
             if status != kernels.FULL:
                 return status
+            # Growing copies every array (a million nodes: 100 MB, 0.1–0.2 s on a loaded machine) and cannot be cut
+            # short: when the last growth's time, doubled with the size, would run past the plan's deadline, the
+            # plan is out of time now rather than after it (an anytime round then ends with the best path so far).
+            clock = getattr(_LOOP, "clock", None)
+            if clock is not None and time.perf_counter() + GROWTH_MARGIN * self.grow_s > clock.deadline:
+                raise PlannerTimedOut(
+                    f"no path found within the time limit of {clock.time_limit_s:g} s ({self.expansions} expansions; "
+                    f"the search's storage of {self.node_f.shape[0]} nodes was full)",
+                    planning_time_s=clock.elapsed_s(), expansions=self.expansions)
+            t0 = time.perf_counter()
             self.node_f = np.concatenate([self.node_f, np.empty_like(self.node_f)])
             self.node_i = np.concatenate([self.node_i, np.empty_like(self.node_i)])
             self.heap_keys = np.concatenate([self.heap_keys, np.empty_like(self.heap_keys)])
             self.heap_vals = np.concatenate([self.heap_vals, np.empty_like(self.heap_vals)])
+            self.grow_s = time.perf_counter() - t0
 
 
 class HybridAStar:
@@ -470,6 +483,13 @@ class HybridAStar:
         warm_up()
         _LOOP.s = 0.0
         clock = (termination or Termination()).start()
+        _LOOP.clock = clock  # (a search outside a plan, as the tests run them, grows without this check)
+        try:
+            return self._plan(start, goal, clock)
+        finally:
+            _LOOP.clock = None
+
+    def _plan(self, start: Pose, goal: Pose, clock: Clock) -> PlanResult:
         t0 = clock.t0
         o = self.options
         start = (float(start[0]), float(start[1]), wrap(float(start[2])))
@@ -570,7 +590,13 @@ class HybridAStar:
         t0 = clock.t0
         cap = clock.termination.max_iterations if cap is None else min(cap, clock.termination.max_iterations)
         while True:
-            status = run.step(min(self.chunk_expansions(o), cap - run.expansions))
+            try:
+                status = run.step(min(self.chunk_expansions(o), cap - run.expansions))
+            except PlannerTimedOut:
+                if run.counters[kernels.C_HELD_SEGS] > 0:  # out of time with a shot held back: it is the path
+                    kernels.take_held(run.counters, run.seg_roll, run.seg_curv, run.seg_len)
+                    return side
+                raise
             if status == kernels.FOUND:
                 return side
             if status == kernels.EXHAUSTED:

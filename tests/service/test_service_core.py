@@ -196,6 +196,7 @@ def test_a_budget_past_the_time_limit_answers_with_the_best_path() -> None:
     """Issue 21 item 6: the doors count the whole plan against its time limit (service/pipeline.py); with
     improve_until_s past the limit the improvement rounds end early enough that the best path is the answer, not a
     timeout. (The two-walls problem's greed-0 search does not end within seconds, so the limit is what stops it.)"""
+    import itertools
     import math
 
     from planner.hybrid_astar.search import PlannerOptions
@@ -209,4 +210,9 @@ def test_a_budget_past_the_time_limit_answers_with_the_best_path() -> None:
     result = execute_plan(query, two_walls(), load_robot())
     assert result.extra["improvement_stop"] == "time limit"
     assert result.planning_time_s < 1.0
-    assert len(result.extra["improvements"]) >= 2  # the greed 0.5 round's path (≈ 30 ms) beat the first one
+    # the answer is the best path the rounds kept (the first, then whatever beat it: since the search sweeps lazily
+    # the greed 0.5 and 0.25 rounds' paths are longer than the first here, and only the last smoothing, when the
+    # greed-0 search leaves it time before the limit, shortens it, so how many are listed depends on the machine)
+    kept = result.extra["improvements"]
+    assert kept[0]["by"] == "first path" and all(b["cost"] < a["cost"] for a, b in itertools.pairwise(kept))
+    assert result.length_m == pytest.approx(kept[-1]["length_m"], abs=1e-3)  # (states vs motions: sub-mm)

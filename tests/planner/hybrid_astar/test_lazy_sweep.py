@@ -34,3 +34,27 @@ def test_a_long_step_does_not_jump_a_thin_wall(thin_wall, reverse) -> None:
     assert result.length_m > 2 * math.hypot(3.0, 3.0)
     assert float(result.states[:, 1].max()) > 4.0
     assert math.isfinite(result.min_clearance_m)
+
+
+def test_the_node_storage_does_not_grow_past_the_deadline(monkeypatch) -> None:
+    """Growing the search's storage copies every array and cannot be cut short (0.1–0.2 s at a million nodes): it
+    grows only when its last growth's time × GROWTH_MARGIN still fits before the plan's deadline, else the plan is
+    out of time at once. The admissible search (greed 0) of the two-walls problem pushes nodes by the hundred
+    thousand: with the margin made huge it stops at its second growth, long before its limit; with the default it
+    grows on and runs into the limit itself."""
+    from planner.errors import PlannerTimedOut
+    from planner.hybrid_astar import search
+    from planner.termination import Termination
+    from tests.planner.hybrid_astar.test_search import two_walls
+
+    planner = HybridAStar(two_walls(), load_robot("zju-60"), PlannerOptions(greed=0.0))
+    start, goal = (2.0, 2.0, 0.0), (18.0, 18.0, math.pi / 2)
+    monkeypatch.setattr(search, "GROWTH_MARGIN", 1e12)
+    with pytest.raises(PlannerTimedOut, match="storage of 131072 nodes was full") as err:
+        planner.plan(start, goal, Termination(60.0))
+    assert err.value.planning_time_s < 30.0
+    stopped_at = err.value.expansions
+    monkeypatch.setattr(search, "GROWTH_MARGIN", 2.5)
+    with pytest.raises(PlannerTimedOut) as err:
+        planner.plan(start, goal, Termination(1.5))
+    assert err.value.expansions > 2 * stopped_at  # it grew on (where it stops depends on the machine)
