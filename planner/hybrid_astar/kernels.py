@@ -686,10 +686,11 @@ def search_chunk(
         if closed[key >> 3] & (1 << (key & 7)):
             continue
         if node_i[k, 0] >= 0:
-            # 1b. Lazy sweep: a child was checked only at its end pose when it was pushed; its motion from the
-            #     parent is swept now that it is the cheapest open node (about six children are pushed per
-            #     expansion and most are never popped, so most sweeps are never needed). A motion that collides
-            #     is dropped without closing its key: another motion may still reach that state.
+            # 1b. Lazy sweep: a child was checked only at its end pose when it was pushed (and costed with that
+            #     pose's margin); its motion from the parent is swept now that it is the cheapest open node (about
+            #     six children are pushed per expansion and most are never popped, so most sweeps are never needed).
+            #     A motion that collides is dropped without closing its key: another motion may still reach that
+            #     state; one dearer than its estimate is pushed again with its true cost.
             par = node_i[k, 0]
             pyaw = node_f[par, 2]
             cp = math.cos(pyaw)
@@ -702,6 +703,31 @@ def search_chunk(
                                     node_f[par, 1] + radius * d_roll * cp, pyaw, cp, sp, curvs[node_i[k, 1]],
                                     step * node_i[k, 2], mk)
             if mk < 0.0:
+                continue
+            # The motion's true cost: its proximity term from the sweep's least margin, as an eager sweep charges it
+            # (the child was pushed with its end pose's margin, which is never below it, so the estimate is a lower
+            # bound). When it is dearer, the node goes back into the open list with its true cost.
+            ri = node_i[k, 1]
+            steps = node_i[k, 2]
+            shift = abs(radius * d_roll)
+            prox = 0.0
+            if p[P_PROX_RANGE] > 0.0:
+                prox = max(0.0, 1.0 - mk / p[P_PROX_RANGE])
+            travel = (step * abs(steps) + shift) * (1.0 + p[P_COST_PENALTY] * prox)
+            if abs(curvs[ri]) > 1e-12:
+                travel *= p[P_NON_STRAIGHT]
+            if steps < 0:
+                travel *= p[P_REVERSE]
+            travel += p[P_CHANGE] * shift
+            pdir = 1 if node_i[par, 2] > 0 else -1 if node_i[par, 2] < 0 else 0
+            if pdir != 0 and pdir != (1 if steps > 0 else -1):
+                travel += p[P_SWITCH]
+            true_g = node_f[par, 4] + travel
+            if true_g > g + 1e-9:
+                node_f[k, 4] = true_g
+                h_true = _heuristic(htab, rs, p, x, y, yaw)
+                if true_g + h_true <= p[P_BOUND]:
+                    heap_push(heap_keys, heap_vals, heap_size, true_g + h_true * (1.0 + greed), k)
                 continue
         closed[key >> 3] |= 1 << (key & 7)
         done += 1
@@ -797,8 +823,6 @@ def search_chunk(
         c_yaw = math.cos(yaw)
         s_yaw = math.sin(yaw)
         straight_yaw = _wrap_cs(c_yaw, s_yaw)
-        # the proximity cost of a child's motion is taken at its two ends (its sweep comes later, 1b)
-        here_margin = max(0.0, _pose_margin_at(clear, blocked, p, offx, offy, px, py, x, y, yaw, c_yaw, s_yaw))
         for d in range(2):
             direction = 1 if d == 0 else -1
             if direction < 0 and not allow_reverse:
@@ -824,14 +848,14 @@ def search_chunk(
                 ckey = _closed_key(p, w, cx, cy, cyaw, roll_bins[ri], n_roll_bins)
                 if closed[ckey >> 3] & (1 << (ckey & 7)):
                     continue
-                # only the end pose now: the motion is swept when (if) the child is popped (1b)
+                # only the end pose now, and its margin for the proximity cost: the motion is swept (and its cost
+                # corrected) when the child is popped (1b)
                 if abs(curv) < STRAIGHT_EPS:
                     margin = _pose_margin_at(clear, blocked, p, offx, offy, px, py, cx, cy, cyaw, c_yaw, s_yaw)
                 else:
                     margin = _pose_margin_at(clear, blocked, p, offx, offy, px, py, cx, cy, cyaw, c2, s2)
                 if margin < 0.0:
                     continue
-                margin = min(margin, here_margin)
                 h = _heuristic(htab, rs, p, cx, cy, cyaw)
                 if not math.isfinite(h):
                     continue
