@@ -206,10 +206,10 @@ def test_a_budget_past_the_time_limit_answers_with_the_best_path() -> None:
     from tests.planner.hybrid_astar.test_search import two_walls
 
     query = PlanQuery((2.0, 2.0, 0.0), (18.0, 18.0, math.pi / 2), PlannerOptions(improve_until_s=600.0),
-                      Termination(1.0))
+                      Termination(3.0))  # (the rounds end 10 % early: 0.3 s of room for a loaded machine)
     result = execute_plan(query, two_walls(), load_robot())
     assert result.extra["improvement_stop"] == "time limit"
-    assert result.planning_time_s < 1.0
+    assert result.planning_time_s < 3.0
     # the answer is the best path the rounds kept (the first, then whatever beat it: since the search sweeps lazily
     # the greed 0.5 and 0.25 rounds' paths are longer than the first here, and only the last smoothing, when the
     # greed-0 search leaves it time before the limit, shortens it, so how many are listed depends on the machine)
