@@ -185,6 +185,26 @@ def _motion_margin(
 
 
 @njit(cache=True)
+def _travel(p: np.ndarray, length: float, shift: float, curv: float, direction: int, parent_dir: int,
+            margin: float) -> float:
+    """The search's cost of one motion (eq. 14f with Nav2's terms): its length and sideways shift × proximity (from
+    the footprint ``margin``), × the non-straight and reverse multipliers, plus the roll-change and direction-switch
+    costs."""
+    prox = 0.0
+    if p[P_PROX_RANGE] > 0.0:
+        prox = max(0.0, 1.0 - margin / p[P_PROX_RANGE])
+    travel = (length + shift) * (1.0 + p[P_COST_PENALTY] * prox)
+    if abs(curv) > 1e-12:
+        travel *= p[P_NON_STRAIGHT]
+    if direction < 0:
+        travel *= p[P_REVERSE]
+    travel += p[P_CHANGE] * shift
+    if parent_dir != 0 and parent_dir != direction:
+        travel += p[P_SWITCH]
+    return travel
+
+
+@njit(cache=True)
 def _heuristic(htab: np.ndarray, rs: np.ndarray, p: np.ndarray, x: float, y: float, yaw: float) -> float:
     """max(holonomic table, Dubins distance) forward; max(holonomic, Reeds–Shepp table) with reversing."""
     ix = int(math.floor((x - p[P_HOX]) / p[P_HCELL]))
@@ -707,22 +727,10 @@ def search_chunk(
             # The motion's true cost: its proximity term from the sweep's least margin, as an eager sweep charges it
             # (the child was pushed with its end pose's margin, which is never below it, so the estimate is a lower
             # bound). When it is dearer, the node goes back into the open list with its true cost.
-            ri = node_i[k, 1]
             steps = node_i[k, 2]
-            shift = abs(radius * d_roll)
-            prox = 0.0
-            if p[P_PROX_RANGE] > 0.0:
-                prox = max(0.0, 1.0 - mk / p[P_PROX_RANGE])
-            travel = (step * abs(steps) + shift) * (1.0 + p[P_COST_PENALTY] * prox)
-            if abs(curvs[ri]) > 1e-12:
-                travel *= p[P_NON_STRAIGHT]
-            if steps < 0:
-                travel *= p[P_REVERSE]
-            travel += p[P_CHANGE] * shift
             pdir = 1 if node_i[par, 2] > 0 else -1 if node_i[par, 2] < 0 else 0
-            if pdir != 0 and pdir != (1 if steps > 0 else -1):
-                travel += p[P_SWITCH]
-            true_g = node_f[par, 4] + travel
+            true_g = node_f[par, 4] + _travel(p, step * abs(steps), abs(radius * d_roll), curvs[node_i[k, 1]],
+                                              1 if steps > 0 else -1, pdir, mk)
             if true_g > g + 1e-9:
                 node_f[k, 4] = true_g
                 h_true = _heuristic(htab, rs, p, x, y, yaw)
@@ -837,6 +845,7 @@ def search_chunk(
                     cx = x1 + s_child * c_yaw
                     cy = y1 + s_child * s_yaw
                     cyaw = straight_yaw
+                    c2, s2 = c_yaw, s_yaw
                 else:
                     yaw2 = yaw + curv * s_child
                     c2 = math.cos(yaw2)
@@ -850,30 +859,14 @@ def search_chunk(
                     continue
                 # only the end pose now, and its margin for the proximity cost: the motion is swept (and its cost
                 # corrected) when the child is popped (1b)
-                if abs(curv) < STRAIGHT_EPS:
-                    margin = _pose_margin_at(clear, blocked, p, offx, offy, px, py, cx, cy, cyaw, c_yaw, s_yaw)
-                else:
-                    margin = _pose_margin_at(clear, blocked, p, offx, offy, px, py, cx, cy, cyaw, c2, s2)
+                margin = _pose_margin_at(clear, blocked, p, offx, offy, px, py, cx, cy, cyaw, c2, s2)
                 if margin < 0.0:
                     continue
                 h = _heuristic(htab, rs, p, cx, cy, cyaw)
                 if not math.isfinite(h):
                     continue
-                # 5. Travel cost: length (incl. the sideways shift) × proximity, turning, reversing,
-                #    roll-change and direction-switch terms (eq. 14f with Nav2's cost terms).
-                shift = abs(radius * d_roll)
-                prox = 0.0
-                if p[P_PROX_RANGE] > 0.0:
-                    prox = max(0.0, 1.0 - margin / p[P_PROX_RANGE])
-                travel = (step * mult + shift) * (1.0 + p[P_COST_PENALTY] * prox)
-                if abs(curvs[ri]) > 1e-12:
-                    travel *= p[P_NON_STRAIGHT]
-                if direction < 0:
-                    travel *= p[P_REVERSE]
-                travel += p[P_CHANGE] * shift
-                if parent_dir != 0 and parent_dir != direction:
-                    travel += p[P_SWITCH]
-                cg = g + travel
+                # 5. Travel cost (eq. 14f with Nav2's cost terms), 1b charges the same with the sweep's margin
+                cg = g + _travel(p, step * mult, abs(radius * d_roll), curvs[ri], direction, parent_dir, margin)
                 if cg + h > p[P_BOUND]:  # no cheaper than a path already known (h never exceeds the cost-to-go)
                     continue
                 c = counters[C_NODES]
