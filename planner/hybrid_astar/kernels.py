@@ -17,6 +17,7 @@ import math
 import numpy as np
 from numba import njit
 
+from planner.hybrid_astar import closed_set
 from planner.hybrid_astar.dubins import WORD_TURNS, dubins_distance, dubins_shortest
 from planner.hybrid_astar.heap import heap_pop, heap_push
 from planner.hybrid_astar.reeds_shepp import MAX_SEGS as RS_MAX_SEGS
@@ -672,12 +673,13 @@ def search_chunk(
     rolls: np.ndarray, curvs: np.ndarray, roll_bins: np.ndarray, n_roll_bins: int,
     node_f: np.ndarray, node_i: np.ndarray,
     heap_keys: np.ndarray, heap_vals: np.ndarray, heap_size: np.ndarray,
-    closed: np.ndarray, counters: np.ndarray, max_expansions: int,
+    closed: np.ndarray, closed_table: np.ndarray, counters: np.ndarray, max_expansions: int,
     seg_roll: np.ndarray, seg_curv: np.ndarray, seg_len: np.ndarray,
 ) -> int:
     """Run up to ``max_expansions`` Hybrid-A* expansions.
 
-    node_f[k] = (x, y, yaw, roll, g); node_i[k] = (parent, roll index, direction ±1 × steps rolled).
+    node_f[k] = (x, y, yaw, roll, g); node_i[k] = (parent, roll index, direction ±1 × steps rolled). The closed
+    set is the bitset ``closed`` or, when that is empty, the hash set ``closed_table`` (:mod:`closed_set`).
     """
     w = clear.shape[1]
     n_roll = rolls.size
@@ -703,7 +705,7 @@ def search_chunk(
         _, k = heap_pop(heap_keys, heap_vals, heap_size)
         x, y, yaw, roll, g = node_f[k, 0], node_f[k, 1], node_f[k, 2], node_f[k, 3], node_f[k, 4]
         key = _closed_key(p, w, x, y, yaw, roll_bins[node_i[k, 1]], n_roll_bins)
-        if closed[key >> 3] & (1 << (key & 7)):
+        if closed_set.is_closed(closed, closed_table, key):
             continue
         if node_i[k, 0] >= 0:
             # 1b. Lazy sweep: a child was checked only at its end pose when it was pushed (and costed with that
@@ -737,7 +739,7 @@ def search_chunk(
                 if true_g + h_true <= p[P_BOUND]:
                     heap_push(heap_keys, heap_vals, heap_size, true_g + h_true * (1.0 + greed), k)
                 continue
-        closed[key >> 3] |= 1 << (key & 7)
+        closed_set.close(closed, closed_table, key)
         done += 1
         counters[C_EXPANSIONS] += 1
         # 2. Goal test: bring the roll back to 0 (a sideways shift) and compare with the goal pose.
@@ -855,7 +857,7 @@ def search_chunk(
                     cyaw = _wrap_cs(c2, s2)
                 # a child already expanded is dropped before its (far dearer) collision sweep
                 ckey = _closed_key(p, w, cx, cy, cyaw, roll_bins[ri], n_roll_bins)
-                if closed[ckey >> 3] & (1 << (ckey & 7)):
+                if closed_set.is_closed(closed, closed_table, ckey):
                     continue
                 # only the end pose now, and its margin for the proximity cost: the motion is swept (and its cost
                 # corrected) when the child is popped (1b)

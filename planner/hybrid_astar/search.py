@@ -52,7 +52,7 @@ from planner.errors import (
     StartOccupied,
     StartOutsideMap,
 )
-from planner.hybrid_astar import kernels, meet
+from planner.hybrid_astar import closed_set, kernels, meet
 from planner.hybrid_astar.anytime import MAX_IMPROVE_S, improve
 from planner.hybrid_astar.dubins import dubins_distance
 from planner.hybrid_astar.heuristics import (
@@ -91,7 +91,6 @@ FORWARD_RETRY_SHARE = 0.5  # ... tried when the path found rolls more than this 
 FORWARD_CHECK_BUDGET = 1_000  # ... unless a forward-only search from the goal exhausts within this many (a dead end)
 _LOOP = threading.local()  # the current thread's plan: its clock, its seconds in the compiled loop (search_loop_time_s)
 GROWTH_MARGIN = 2.5  # a search's storage grows only when this × its last growth's time still fits before the deadline
-CLOSED_SET_BUDGET_MB = 1024  # the closed-set bitset of one plan may not exceed this (≈ 6300² cells at defaults, tested)
 # Smoothing's recheck rule (kernels.shortcut): a target whose shot failed from a knot just before is retried only
 # every this many knots, in the later passes and in the first. 1 = every candidate from every knot (the default):
 # with 3 and 2 the shots built halve, but the explore sweep's warehouse-aisle world, reached with 0.22 m of
@@ -258,7 +257,7 @@ def _direction_runs(motions: list[tuple[float, float, float]]) -> list[tuple[int
 
 
 class _Search:
-    """The arrays of one search (open heap, nodes, closed bitset) and chunked calls of the compiled loop."""
+    """The arrays of one search (open heap, nodes, closed set) and chunked calls of the compiled loop."""
 
     def __init__(self, planner: HybridAStar, start: Pose, goal: Pose, heur: HolonomicHeuristic,
                  o: PlannerOptions, reverse: bool) -> None:
@@ -276,8 +275,8 @@ class _Search:
         self.p = p
         grid = planner.grid
         n_keys = grid.width * grid.height * o.n_yaw_bins * planner.n_roll_bins
-        self.closed = np.zeros(n_keys // 8 + 1, dtype=np.uint8)
         cap = 1 << 16
+        self.closed, self.closed_table = closed_set.new_sets(n_keys, cap)  # a bitset, else a hash set (closed_set)
         self.node_f = np.empty((cap, 5))
         self.node_i = np.empty((cap, 3), dtype=np.int64)
         self.heap_keys = np.empty(cap * 2)
@@ -313,7 +312,7 @@ class _Search:
                 pl.clearance.clearance, pl.clearance.blocked, self.heur.table, pl.rs_table, self.p,
                 pl.footprint.offsets_x, pl.footprint.offsets_y, pl._px, pl._py,
                 pl.rolls, pl.curvatures, pl.roll_bins, pl.n_roll_bins, self.node_f, self.node_i, self.heap_keys,
-                self.heap_vals, self.heap_size, self.closed, self.counters, budget,
+                self.heap_vals, self.heap_size, self.closed, self.closed_table, self.counters, budget,
                 self.seg_roll, self.seg_curv, self.seg_len,
             ))
             if status != kernels.FULL:
@@ -332,6 +331,10 @@ class _Search:
             self.node_i = np.concatenate([self.node_i, np.empty_like(self.node_i)])
             self.heap_keys = np.concatenate([self.heap_keys, np.empty_like(self.heap_keys)])
             self.heap_vals = np.concatenate([self.heap_vals, np.empty_like(self.heap_vals)])
+            if self.closed.size == 0:  # the hash set: twice the node capacity, so never over half full
+                table = closed_set.new_table(self.node_f.shape[0])
+                closed_set.rehash(self.closed_table, table)
+                self.closed_table = table
             self.grow_s = time.perf_counter() - t0
 
 
@@ -345,14 +348,6 @@ class HybridAStar:
     def __init__(self, grid: OccupancyGrid, robot: RobotProfile, options: PlannerOptions | None = None) -> None:
         self.options = options or PlannerOptions()
         n_bins = self.options.n_roll_bins or self.options.n_rolls
-        closed_mb = grid.width * grid.height * self.options.n_yaw_bins * n_bins / 8 / 2**20
-        if closed_mb > CLOSED_SET_BUDGET_MB:
-            raise InvalidInput(
-                "options.n_yaw_bins",
-                f"the closed set for this map ({grid.width}×{grid.height} cells × {self.options.n_yaw_bins} yaw bins × "
-                f"{n_bins} roll bins) would need {closed_mb:.0f} MB, over the {CLOSED_SET_BUDGET_MB} MB budget; "
-                "use fewer yaw or roll bins",
-            )
         self.grid = grid
         self.robot = robot
         self.footprint = CircleFootprint.for_robot(robot, self.options.n_circles)

@@ -16,7 +16,7 @@ from planner.errors import (
     StartOccupied,
     StartOutsideMap,
 )
-from planner.hybrid_astar.search import CLEARANCE_REACH_M, CLOSED_SET_BUDGET_MB, HybridAStar, PlannerOptions
+from planner.hybrid_astar.search import CLEARANCE_REACH_M, HybridAStar, PlannerOptions
 from planner.occupancy import OccupancyGrid
 from planner.robot import load_robot
 from planner.termination import Termination
@@ -196,14 +196,3 @@ def test_options_that_would_exhaust_memory_or_spin_are_rejected():
         PlannerOptions.from_dict({"n_rolls": 2000001})
     with pytest.raises(InvalidInput, match=r"options\.chunk_expansions"):
         PlannerOptions.from_dict({"chunk_expansions": 0})
-    huge = OccupancyGrid.from_occupied(np.zeros((3000, 3000), bool), 0.05)
-    with pytest.raises(InvalidInput, match="budget"):
-        HybridAStar(huge, load_robot(), PlannerOptions(n_yaw_bins=720, n_rolls=31, n_roll_bins=0))
-
-
-def test_closed_set_budget_comment_is_true():
-    """search.py says the budget holds about 6300² cells at the default options: one bit per (cell, yaw bin,
-    roll bin)."""
-    o = PlannerOptions()
-    cells = CLOSED_SET_BUDGET_MB * 2**20 * 8 / (o.n_yaw_bins * o.n_roll_bins)
-    assert 6250**2 < cells < 6350**2

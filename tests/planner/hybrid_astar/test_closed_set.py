@@ -1,0 +1,73 @@
+"""The search's closed set (planner.hybrid_astar.closed_set): a hash set whose size follows the search, not the map."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from planner.hybrid_astar import closed_set
+from planner.hybrid_astar.search import HybridAStar, PlannerOptions, _Search
+from planner.occupancy import OccupancyGrid
+from planner.robot import load_robot
+
+
+def test_matches_a_python_set_through_growth() -> None:
+    rng = np.random.default_rng(3)
+    # keys as _closed_key makes them on a 100-million-cell map at 720 yaw bins × 31 roll bins, clustered like a
+    # search's (many in a few cells), and a few negative ones (a child off the grid's low edge)
+    keys = np.concatenate([rng.integers(0, 100_000_000 * 720 * 31, 3000), rng.integers(5000, 5400, 3000),
+                           rng.integers(-300, 0, 200)])
+    table = closed_set.new_table(64)
+    model: set[int] = set()
+    for key in keys.tolist():
+        assert closed_set.contains(table, key) == (key in model)
+        closed_set.add(table, key)
+        model.add(key)
+        if 2 * len(model) >= table.size:  # the search keeps the load at most one half
+            bigger = closed_set.new_table(table.size)
+            closed_set.rehash(table, bigger)
+            table = bigger
+    assert int((table != closed_set.EMPTY).sum()) == len(model)
+    assert all(closed_set.contains(table, k) for k in model)
+    others = rng.integers(0, 100_000_000 * 720 * 31, 2000).tolist()
+    assert [closed_set.contains(table, k) for k in others] == [k in model for k in others]
+
+
+def test_new_table_is_a_power_of_two_at_half_load() -> None:
+    for capacity in (1, 5, 64, 65, 1000):
+        table = closed_set.new_table(capacity)
+        assert table.size >= 2 * capacity and table.size & (table.size - 1) == 0 and table.size < 4 * capacity + 2
+        assert (table == closed_set.EMPTY).all()
+
+
+def test_a_search_costs_the_same_memory_on_any_map() -> None:
+    """The closed set of a 9-million-cell map at 720 yaw bins × 31 roll bins took a 2.5 GB bitset and was refused;
+    now its search holds what a small map's does and plans."""
+    robot = load_robot()
+    options = PlannerOptions(n_yaw_bins=720, n_rolls=31, n_roll_bins=0)
+    sizes = []
+    for cells in (200, 3000):
+        grid = OccupancyGrid.from_occupied(np.zeros((cells, cells), bool), 0.05)
+        planner = HybridAStar(grid, robot, options)
+        start, goal = (3.0, 3.0, 0.0), (7.0, 4.0, 0.5)
+        sizes.append(_Search(planner, start, goal, planner.holonomic(goal[:2], start[:2]), options, True).closed.nbytes)
+        result = planner.plan(start, goal)
+        assert result.length_m > 4.0
+    assert sizes[0] == sizes[1] <= 2**21
+
+
+def test_the_bitset_and_the_hash_set_make_the_same_search(monkeypatch) -> None:
+    """A map under DENSE_MAX_MB gets the bitset; forcing the hash set on it must change no decision."""
+    occ = np.zeros((160, 200), bool)
+    occ[40:120, 90:96] = True  # a wall to go round
+    grid = OccupancyGrid.from_occupied(occ, 0.05)
+    robot = load_robot()
+    start, goal = (1.5, 4.0, 0.0), (4.0, 4.0, 1.57)  # parked against the wall's face: 2 k expansions
+    results = []
+    for dense_mb in (closed_set.DENSE_MAX_MB, 0.0):
+        monkeypatch.setattr(closed_set, "DENSE_MAX_MB", dense_mb)
+        planner = HybridAStar(grid, robot, PlannerOptions())
+        run = _Search(planner, start, goal, planner.holonomic(goal[:2], start[:2]), planner.options, True)
+        assert (run.closed.size > 0) == (dense_mb > 0)
+        results.append(planner.plan(start, goal))
+    assert results[0].expansions == results[1].expansions > 1000
+    np.testing.assert_array_equal(results[0].states, results[1].states)
