@@ -36,8 +36,9 @@ N_COUNTERS = 10
 (P_OX, P_OY, P_RES, P_RC, P_HOX, P_HOY, P_HCELL, P_RHO, P_GX, P_GY, P_GYAW, P_TOL_XY, P_TOL_YAW, P_RADIUS,
  P_STEP, P_SPACING, P_NON_STRAIGHT, P_CHANGE, P_REVERSE, P_SWITCH, P_COST_PENALTY, P_PROX_RANGE, P_GREED,
  P_SHOT_RATIO, P_MAX_ROLL, P_USE_DUBINS, P_ALLOW_REVERSE, P_N_YAW, P_USE_RS, P_RS_CELL, P_RS_HALF,
- P_PREFERRED, P_REACH, P_BEST_H, P_REJECT, P_CLOSER_H, P_HELD_COST, P_BACK_SHARE, P_BOUND, P_LONG) = range(40)
-N_PARAMS = 40
+ P_PREFERRED, P_REACH, P_BEST_H, P_REJECT, P_CLOSER_H, P_HELD_COST, P_BACK_SHARE, P_BOUND, P_LONG,
+ P_GCOS, P_GSIN) = range(42)  # P_GCOS, P_GSIN: cos and sin of P_GYAW (set with it, for the Reeds–Shepp table's frame)
+N_PARAMS = 42
 BEST_SHOT_EVERY = 256  # reversing: every this many expansions, a Reeds–Shepp shot from the closest node if new
 NEAR_TIE = 1.05  # the second / third cheapest Reeds–Shepp word is shot only within this ratio of the cheapest
 MAX_SHOT_SEGS = 6  # a Dubins shot has 3 segments, a Reeds–Shepp shot up to 5
@@ -222,8 +223,8 @@ def _heuristic(htab: np.ndarray, rs: np.ndarray, p: np.ndarray, x: float, y: flo
         # the Reeds–Shepp table is in the goal's frame, ±P_RS_HALF cells of P_RS_CELL around it
         dx = x - p[P_GX]
         dy = y - p[P_GY]
-        c = math.cos(p[P_GYAW])
-        s = math.sin(p[P_GYAW])
+        c = p[P_GCOS]
+        s = p[P_GSIN]
         half = p[P_RS_HALF]
         i = int(math.floor((c * dx + s * dy) / p[P_RS_CELL] + half))
         j = int(math.floor((-s * dx + c * dy) / p[P_RS_CELL] + half))

@@ -435,6 +435,7 @@ class HybridAStar:
         p[kernels.P_RC] = self.footprint.radius_m
         p[kernels.P_RHO] = self.robot.min_turning_radius_m
         p[kernels.P_GX], p[kernels.P_GY], p[kernels.P_GYAW] = goal
+        p[kernels.P_GCOS], p[kernels.P_GSIN] = math.cos(goal[2]), math.sin(goal[2])
         p[kernels.P_TOL_XY], p[kernels.P_TOL_YAW] = o.goal_tolerance_m, o.goal_tolerance_yaw_rad
         p[kernels.P_RADIUS] = self.robot.radius_m
         p[kernels.P_STEP] = self.resolved_step_m
