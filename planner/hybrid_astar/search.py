@@ -82,10 +82,10 @@ HEURISTIC_CACHE_SIZE = 8  # holonomic tables kept per planner (one per goal cell
 GOAL_CHECK_AFTER = 20_000  # expansions without a path before the goal's surroundings are searched (fail fast)
 GOAL_CHECK_BUDGET = 40_000  # expansions that search may take
 GOAL_CHECK_SHARE = 0.15  # ... and at most this share of the time limit
-GOAL_SIDE_AFTER = 2_000  # expansions without a path before the goal side's search joins in (two_ended.py)
+GOAL_SIDE_AFTER = 500  # expansions without a path before the goal side's search joins in (two_ended.py)
 MEET_AFTER = 10_000  # expansions of both sides before shots try to join their trees (meet.py): tails only
-FORWARD_RETRY_PER_M = 400  # expansions a forward-only search may take to find a cheaper path, per metre start–goal,
-FORWARD_RETRY_MIN = 3_000  # ... at least this many
+FORWARD_RETRY_PER_M = 250  # expansions a forward-only search may take to find a cheaper path, per metre start–goal,
+FORWARD_RETRY_MIN = 1_000  # ... at least this many
 FORWARD_RETRY_MAX = 20_000  # ... and at most this many (docs/planning.md: the budgets the accepted paths needed)
 FORWARD_RETRY_SHARE = 0.5  # ... tried when the path found rolls more than this share of its length backwards
 FORWARD_CHECK_BUDGET = 1_000  # ... unless a forward-only search from the goal exhausts within this many (a dead end)
@@ -128,7 +128,7 @@ class PlannerOptions:
     greed: float = 1.0               # eq. 14j; 0 = admissible A* (slow: 7 rolls × 72 bins); smoothing recovers length
     analytic_ratio_m: float = 3.5     # try a Dubins shot every max(1, h / ratio) expansions
     heuristic_downsample: int = 0     # holonomic grid coarsening; 0 = auto (≥ 2, at most ~50k coarse cells)
-    chunk_expansions: int = 2000
+    chunk_expansions: int = 500
     state_spacing_m: float = 0.04     # spacing of the returned states (≤ 5 cm, docs/contracts.md)
     smooth: bool = True               # shortcut the search's path with collision-checked rollable Dubins shots
     smooth_max_tries: int = 24        # candidate shortcut targets tried per path knot (half in the later passes)

@@ -61,11 +61,13 @@ def test_the_bitset_and_the_hash_set_make_the_same_search(monkeypatch) -> None:
     occ[40:120, 90:96] = True  # a wall to go round
     grid = OccupancyGrid.from_occupied(occ, 0.05)
     robot = load_robot()
-    start, goal = (1.5, 4.0, 0.0), (4.0, 4.0, 1.57)  # parked against the wall's face: 2 k expansions
+    # parked against the wall's face: 2 k expansions from the start alone (the goal side, which joins after 500 and
+    # finds the path in under 700, is left out so that the start side's closed set does the work)
+    start, goal = (1.5, 4.0, 0.0), (4.0, 4.0, 1.57)
     results = []
     for dense_mb in (closed_set.DENSE_MAX_MB, 0.0):
         monkeypatch.setattr(closed_set, "DENSE_MAX_MB", dense_mb)
-        planner = HybridAStar(grid, robot, PlannerOptions())
+        planner = HybridAStar(grid, robot, PlannerOptions(dead_end_check=False))
         run = _Search(planner, start, goal, planner.holonomic(goal[:2], start[:2]), planner.options, True)
         assert (run.closed.size > 0) == (dense_mb > 0)
         results.append(planner.plan(start, goal))

@@ -260,3 +260,41 @@ def test_ranked_words_are_the_next_cheapest_and_end_on_the_goal() -> None:
         else:
             assert cost <= 1.05 * best + 1e-9
     assert refused > 50
+
+
+def test_the_shortcut_probe_decides_on_its_five_poses_per_motion() -> None:
+    """kernels._probe_margin (the smoother's cheap first look at a shot) rejects a shot exactly when one of the poses
+    at 1/8, 1/4, 1/2, 3/4 and 7/8 of one of its motions (rolled with the planner's child_pose) is below the margin
+    asked for, whatever order it visits them in; near walls both outcomes occur."""
+    grid = load_map("maps/garage.yaml")
+    planner = HybridAStar(grid, ROBOT)
+    cm, fp = planner.clearance, planner.footprint
+    r = ROBOT.radius_m
+    rng = np.random.default_rng(11)
+    outcomes = {True: 0, False: 0}
+    near = np.argwhere((cm.clearance > 0.3) & (cm.clearance < 1.2))
+    for _ in range(600):
+        iy, ix = near[rng.integers(len(near))]
+        x, y = cm.origin_x + (ix + 0.5) * cm.resolution_m, cm.origin_y + (iy + 0.5) * cm.resolution_m
+        yaw, roll = float(rng.uniform(-math.pi, math.pi)), float(rng.choice(planner.rolls))
+        n = int(rng.integers(1, 4))
+        sr = rng.choice([-ROBOT.max_roll_rad, 0.0, ROBOT.max_roll_rad], kernels.MAX_SHOT_SEGS)
+        sc = np.array([ROBOT.roll_model.curvature(v) for v in sr])
+        sl = rng.uniform(0.2, 2.0, kernels.MAX_SHOT_SEGS)
+        want = float(rng.uniform(0.0, 0.4))
+        p = planner._params((x, y, yaw), True)
+        probe = kernels._probe_margin(cm.clearance, cm.blocked, p, fp.offsets_x, fp.offsets_y, planner._px,
+                                      planner._py, x, y, yaw, roll, sr, sc, sl, n, want)
+        poses = []
+        cx, cy, cyaw, croll = x, y, yaw, roll
+        for k in range(n):
+            poses += [child_pose(cx, cy, cyaw, croll, sr[k], sc[k], r, f * sl[k]) for f in (0.125, 0.25, 0.5, 0.75, 0.875)]
+            cx, cy, cyaw = child_pose(cx, cy, cyaw, croll, sr[k], sc[k], r, sl[k])
+            croll = sr[k]
+        least = min(kernels._pose_margin(cm.clearance, cm.blocked, p, fp.offsets_x, fp.offsets_y, planner._px,
+                                         planner._py, *pose) for pose in poses)
+        assert (probe < want) == (least < want)
+        if probe >= want:
+            assert probe == pytest.approx(least, abs=1e-9)
+        outcomes[probe >= want] += 1
+    assert outcomes[True] > 50 and outcomes[False] > 50
