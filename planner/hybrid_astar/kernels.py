@@ -118,7 +118,7 @@ def _shift_margin_at(
             worst = m
             if worst < 0.0:
                 return worst
-        advance = max(spacing, m)
+        advance = max(spacing, m) if m > 0.0 else 0.5 * spacing
     return worst
 
 
@@ -163,7 +163,7 @@ def _arc_margin_at(
             worst = m
             if worst < 0.0:
                 return worst
-        advance = max(spacing, m / factor)
+        advance = max(spacing, m / factor) if m > 0.0 else 0.5 * spacing
     return worst
 
 
@@ -177,7 +177,11 @@ def _motion_margin(
 
     Poses are sampled at most p[P_SPACING] apart, farther where there is room: with margin m > 0 the circles
     stay clear while their centres move less than m, and a centre moves at most (1 + |κ|·reach) per metre
-    travelled (reach = the farthest circle centre from the robot's centre).
+    travelled (reach = the farthest circle centre from the robot's centre). After a pose where only the exact
+    polygon fits (m = 0) the next is half p[P_SPACING] on (a quarter cell, the spacing of the final exact check of a
+    path): at half a cell a polygon corner could clip a cell between two samples, and the search then kept motions
+    the final check rejects (bays#5 of the seed-1 real-map draw: every path through one such motion, found by the
+    goal side after 85 k expansions and by 141 joins after it, was dropped; 372 k expansions, 3.8 s, now 18 k).
     """
     worst = _shift_margin(clear, blocked, p, offx, offy, px, py, x, y, yaw, d_roll, worst_so_far)
     if worst < 0.0:

@@ -298,3 +298,23 @@ def test_the_shortcut_probe_decides_on_its_five_poses_per_motion() -> None:
             assert probe == pytest.approx(least, abs=1e-9)
         outcomes[probe >= want] += 1
     assert outcomes[True] > 50 and outcomes[False] > 50
+
+
+def test_a_sweep_where_only_the_polygon_fits_samples_as_densely_as_the_final_check() -> None:
+    """A motion of the goal side's search on bays#5 of the seed-1 real-map draw (a sphere parked across a narrow bay):
+    the polygon clips a cell between two samples half a cell apart, where only the polygon (not the covering circles)
+    fits. The sweep sampled it free; the final exact check of every path through it found the hit. Sampling at a
+    quarter cell after such a pose finds it too."""
+    grid = load_map("maps/real/bays.yaml")
+    planner = HybridAStar(grid, ROBOT)
+    cm, fp = planner.clearance, planner.footprint
+    p = planner._params((7.825, 11.075, 0.48), True)
+    x, y, yaw, roll = 7.7354849760472035, 10.405456190789181, -5.015868613556749, -0.2617993877991494
+    held, curv, s = -0.1767683254557281, -0.5954426498469392, 0.09770486166568534
+    poses = [(*child_pose(x, y, yaw, roll, roll + f * (held - roll), 0.0, ROBOT.radius_m, 0.0)[:2], yaw)
+             for f in np.linspace(0.0, 1.0, 50)]
+    poses += [child_pose(x, y, yaw, roll, held, curv, ROBOT.radius_m, t) for t in np.linspace(0.0, s, 2000)]
+    assert cm.footprint_margins(fp, planner.polygon, np.array(poses)).min() < 0  # it does collide
+    swept = kernels._motion_margin(cm.clearance, cm.blocked, p, fp.offsets_x, fp.offsets_y, planner._px,
+                                   planner._py, x, y, yaw, held - roll, curv, s, math.inf)
+    assert swept < 0

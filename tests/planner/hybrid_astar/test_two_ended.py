@@ -141,3 +141,16 @@ def test_the_goal_side_joins_early_where_the_start_side_stalls_at_the_goal():
     assert result.extra["found_from"] == "goal"
     assert result.expansions < 1500
     assert check_path(grid, ROBOT, result.states, start, goal) == []
+
+
+def test_a_goal_parked_across_a_narrow_bay_is_found_from_the_goal_side():
+    # bays#5 of the real-map bench's seed-1 draw: start at the end of one bay, goal across another. The goal side
+    # found the path after 85 k expansions but its search had kept a motion that clips a cell between two sweep
+    # samples, so the final exact check dropped it and every later join through it (372 k expansions, 3.8 s);
+    # sampled as densely as that check where only the polygon fits, it is found after 9 k goal-side expansions.
+    grid = load_map("maps/real/bays.yaml")
+    start = (3.2750000000000004, 2.9250000000000003, -1.8645883699713708)
+    goal = (7.825, 11.075000000000001, 0.48191853022539144)
+    result = HybridAStar(grid, ROBOT).plan(start, goal, Termination(time_limit_s=60.0))
+    assert result.expansions < 60_000
+    assert check_path(grid, ROBOT, result.states, start, goal) == []
