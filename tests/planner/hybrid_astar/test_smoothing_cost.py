@@ -12,6 +12,7 @@ import pytest
 from planner.hybrid_astar import search
 from planner.hybrid_astar.search import HybridAStar, PlannerOptions
 from planner.maps.load import load_map
+from planner.occupancy import OccupancyGrid
 from planner.robot import load_robot
 from tests.pathcheck import check_path
 
@@ -53,3 +54,45 @@ def test_smoothing_skips_shots_without_lengthening_the_path(name, monkeypatch) -
     assert counts[2] > 0
     assert counts[0] < 0.6 * every[0]
     assert length <= 1.01 * every_length
+
+
+def _corridor_wiggle(half_width_m: float):
+    """A 20 × 10 m map with a corridor of 2 × ``half_width_m`` along y = 5 m, and a 6 m path down its middle that
+    wiggles (held rolls ±0.33 φmax every 0.6 m): its footprint margin is the same everywhere along it."""
+    occ = np.zeros((200, 400), bool)
+    occ[:, :2] = occ[:, -2:] = True
+    occ[:round((5.0 - half_width_m) / 0.05)] = True
+    occ[round((5.0 + half_width_m) / 0.05):] = True
+    planner = HybridAStar(OccupancyGrid.from_occupied(occ, 0.05, name="corridor"), ROBOT)
+    held = 0.33 * ROBOT.max_roll_rad
+    motions = [(h, ROBOT.roll_model.curvature(h), 0.1) for h in
+               (held if ((k + 3) // 6) % 2 == 0 else -held for k in range(60))] + [(0.0, 0.0, 0.0)]
+    return planner, (4.0, 5.0, 0.0), motions
+
+
+def _least_margin(planner, start, motions) -> float:
+    fine = planner._densify(start, motions, planner.grid.resolution_m / 4)
+    return float(planner.clearance.footprint_margins(planner.footprint, planner.polygon, fine[:, :3]).min())
+
+
+@pytest.mark.parametrize(("half_width", "margin", "shortened"), [(0.75, 0.298, True), (0.7, 0.248, True),
+                                                                   (0.6, 0.148, False)])
+def test_a_stretch_closer_than_the_preferred_clearance_is_shortcut_keeping_its_own_margin(half_width, margin,
+                                                                                        shortened) -> None:
+    """A shortcut keeps the preferred clearance (0.3 m for zju-60) unless the stretch it replaces came closer; then it
+    keeps that stretch's least knot margin, and never less than kernels.SHORTCUT_MIN_MARGIN_M (0.2 m). The knots'
+    margins were once measured with a motion of length 0 (no pose sampled, so +inf), which made every shortcut keep
+    0.3 m: a path down a corridor with 0.298 m or 0.248 m of margin was never straightened."""
+    from planner.hybrid_astar import kernels
+
+    planner, start, motions = _corridor_wiggle(half_width)
+    assert _least_margin(planner, start, motions) == pytest.approx(margin, abs=0.005)
+    counts = np.zeros(4, dtype=np.int64)
+    out = planner._shortcut(start, motions, planner._params((10.0, 5.0, 0.0), True), 24, 1, counts)
+    before, after = planner._length(start, motions), planner._length(start, out)
+    if shortened:
+        assert counts[3] >= 1 and after < before - 0.3
+        assert _least_margin(planner, start, out) >= min(margin, ROBOT.preferred_clearance_m) - 0.005
+    else:  # the stretch's own margin is under the floor: no shortcut may come that close
+        assert margin < kernels.SHORTCUT_MIN_MARGIN_M
+        assert counts[3] == 0 and after == before
