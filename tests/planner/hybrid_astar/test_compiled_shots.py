@@ -321,18 +321,18 @@ def test_a_sweep_where_only_the_polygon_fits_samples_as_densely_as_the_final_che
 
 
 def test_a_goal_closer_to_a_wall_than_the_preferred_clearance_is_reached_by_a_shot() -> None:
-    """The search's periodic shot keeps the preferred clearance only where its two ends have it: the ends' pose
-    margins. They were measured with a motion of length 0 (no pose sampled, so +inf), so a shot into a goal 0.15 m
-    from a wall (margin < 0.3 m) never landed; the forward-only search then needed 512 expansions (the goal side's
-    help) instead of about 30."""
+    """The search's periodic shot keeps the preferred clearance only where its two ends have it, else as much as they
+    have but at least kernels.LEAST_KEPT_MARGIN_M: the ends' pose margins. They were measured with a motion of length
+    0 (no pose sampled, so +inf), so a shot into a goal 0.25 m from the nearest wall contact (margin < 0.3 m) never
+    landed; the forward-only search then needed about 500 expansions (the goal side's help) instead of about 40."""
     occ = np.zeros((200, 400), bool)
     occ[:, :2] = occ[:, -2:] = True
     occ[:2] = occ[-2:] = True
     occ[:100, 300:] = True  # a block: x ≥ 15 m, y < 5 m
     grid = OccupancyGrid.from_occupied(occ, 0.05, name="wall")
     planner = HybridAStar(grid, ROBOT, PlannerOptions(allow_reverse=False))
-    start, goal = (4.0, 5.0, 0.0), (17.0, 5.6, 0.0)
-    assert 0.1 < planner.footprint_margin(goal) < ROBOT.preferred_clearance_m
+    start, goal = (4.0, 5.0, 0.0), (17.0, 5.65, 0.0)
+    assert kernels.LEAST_KEPT_MARGIN_M < planner.footprint_margin(goal) < ROBOT.preferred_clearance_m
     result = planner.plan(start, goal)
     assert result.analytic_segments > 0 and result.expansions < 200
     assert check_path(grid, ROBOT, result.states, start, goal) == []

@@ -80,7 +80,7 @@ def _least_margin(planner, start, motions) -> float:
 def test_a_stretch_closer_than_the_preferred_clearance_is_shortcut_keeping_its_own_margin(half_width, margin,
                                                                                         shortened) -> None:
     """A shortcut keeps the preferred clearance (0.3 m for zju-60) unless the stretch it replaces came closer; then it
-    keeps that stretch's least knot margin, and never less than kernels.SHORTCUT_MIN_MARGIN_M (0.2 m). The knots'
+    keeps that stretch's least knot margin, and never less than kernels.LEAST_KEPT_MARGIN_M (0.2 m). The knots'
     margins were once measured with a motion of length 0 (no pose sampled, so +inf), which made every shortcut keep
     0.3 m: a path down a corridor with 0.298 m or 0.248 m of margin was never straightened."""
     from planner.hybrid_astar import kernels
@@ -94,5 +94,5 @@ def test_a_stretch_closer_than_the_preferred_clearance_is_shortcut_keeping_its_o
         assert counts[3] >= 1 and after < before - 0.3
         assert _least_margin(planner, start, out) >= min(margin, ROBOT.preferred_clearance_m) - 0.005
     else:  # the stretch's own margin is under the floor: no shortcut may come that close
-        assert margin < kernels.SHORTCUT_MIN_MARGIN_M
+        assert margin < kernels.LEAST_KEPT_MARGIN_M
         assert counts[3] == 0 and after == before
