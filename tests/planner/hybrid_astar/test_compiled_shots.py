@@ -288,7 +288,8 @@ def test_the_shortcut_probe_decides_on_its_five_poses_per_motion() -> None:
         poses = []
         cx, cy, cyaw, croll = x, y, yaw, roll
         for k in range(n):
-            poses += [child_pose(cx, cy, cyaw, croll, sr[k], sc[k], r, f * sl[k]) for f in (0.125, 0.25, 0.5, 0.75, 0.875)]
+            poses += [child_pose(cx, cy, cyaw, croll, sr[k], sc[k], r, f * sl[k])
+                      for f in (0.125, 0.25, 0.5, 0.75, 0.875)]
             cx, cy, cyaw = child_pose(cx, cy, cyaw, croll, sr[k], sc[k], r, sl[k])
             croll = sr[k]
         least = min(kernels._pose_margin(cm.clearance, cm.blocked, p, fp.offsets_x, fp.offsets_y, planner._px,
