@@ -179,7 +179,9 @@ def _motion_margin(
 
     Poses are sampled at most p[P_SPACING] apart, farther where there is room: with margin m > 0 the circles
     stay clear while their centres move less than m, and a centre moves at most (1 + |κ|·reach) per metre
-    travelled (reach = the farthest circle centre from the robot's centre). After a pose where only the exact
+    travelled (reach = the farthest circle centre from the robot's centre). The start pose itself is not sampled (it
+    is the end of the motion before): a motion of length 0 samples nothing and returns ``worst_so_far``; a pose's
+    own margin is :func:`_pose_margin`. After a pose where only the exact
     polygon fits (m = 0) the next is half p[P_SPACING] on (a quarter cell, the spacing of the final exact check of a
     path): at half a cell a polygon corner could clip a cell between two samples, and the search then kept motions
     the final check rejects (bays#5 of the seed-1 real-map draw: every path through one such motion, found by the
@@ -705,7 +707,6 @@ def search_chunk(
     step = p[P_STEP]
     allow_reverse = p[P_ALLOW_REVERSE] > 0.5
     greed = p[P_GREED]
-    goal_margin = _pose_margin(clear, blocked, p, offx, offy, px, py, p[P_GX], p[P_GY], p[P_GYAW])
     goal_pose_margin = _pose_margin(clear, blocked, p, offx, offy, px, py, p[P_GX], p[P_GY], p[P_GYAW])
     c2 = s2 = 0.0
     done = 0
@@ -782,7 +783,7 @@ def search_chunk(
             # ends never limited the shot until issue 21's fifth round; without the floor a goal 3 cm from a wall let a
             # shot graze every wall on its way, maze_across 33.8 -> 36.3 m)
             here = _pose_margin(clear, blocked, p, offx, offy, px, py, x, y, yaw)
-            keep = max(0.0, min(p[P_PREFERRED], max(LEAST_KEPT_MARGIN_M, min(here, goal_margin))))
+            keep = max(0.0, min(p[P_PREFERRED], max(LEAST_KEPT_MARGIN_M, min(here, goal_pose_margin))))
             n = try_shot(clear, blocked, p, offx, offy, px, py, x, y, yaw, roll, p[P_GX], p[P_GY], p[P_GYAW], 0.0,
                          seg_roll, seg_curv, seg_len, 2.0 * h_here + 1e-6 if allow_reverse else math.inf, keep)
             if n > 0:

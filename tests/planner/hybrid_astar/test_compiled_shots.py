@@ -201,6 +201,23 @@ def _walls(h: int, w: int) -> np.ndarray:
     return occ
 
 
+def _cell_centre(cm, cell: np.ndarray) -> tuple[float, float]:
+    """The map-frame centre of a (row, column) cell of the clearance map ``cm``."""
+    iy, ix = cell
+    return cm.origin_x + (ix + 0.5) * cm.resolution_m, cm.origin_y + (iy + 0.5) * cm.resolution_m
+
+
+def _dense_motion(x: float, y: float, yaw: float, roll0: float, roll1: float, curv: float, s: float, n_shift: int,
+                  n_arc: int) -> np.ndarray:
+    """Poses (x, y, yaw) along a motion rolled with the planner's child_pose: ``n_shift`` through the roll change
+    from ``roll0`` to ``roll1``, then ``n_arc`` along the arc of curvature ``curv`` and signed length ``s``."""
+    r = ROBOT.radius_m
+    poses = [(*child_pose(x, y, yaw, roll0, roll0 + f * (roll1 - roll0), 0.0, r, 0.0)[:2], yaw)
+             for f in np.linspace(0.0, 1.0, n_shift)]
+    poses += [child_pose(x, y, yaw, roll0, roll1, curv, r, t) for t in np.linspace(0.0, s, n_arc)]
+    return np.array(poses)
+
+
 def test_a_motion_sweep_finds_every_collision_a_dense_sampling_finds() -> None:
     """_motion_margin (roll-change sweep, then the arc from where the roll change ends) never calls a motion free
     that a 2 mm sampling of the exact footprint finds in collision, and reports both outcomes near walls."""
@@ -208,13 +225,11 @@ def test_a_motion_sweep_finds_every_collision_a_dense_sampling_finds() -> None:
     planner = HybridAStar(grid, ROBOT)
     p = planner._params((12.0, 23.55, math.pi), True)
     cm, fp = planner.clearance, planner.footprint
-    r = ROBOT.radius_m
     rng = np.random.default_rng(5)
     outcomes = {True: 0, False: 0}
     near = np.argwhere((cm.clearance > 0.2) & (cm.clearance < 0.5))
     for _ in range(2500):
-        iy, ix = near[rng.integers(len(near))]
-        x, y = cm.origin_x + (ix + 0.5) * cm.resolution_m, cm.origin_y + (iy + 0.5) * cm.resolution_m
+        x, y = _cell_centre(cm, near[rng.integers(len(near))])
         yaw = float(rng.uniform(-math.pi, math.pi))
         if planner.footprint_margin((x, y, yaw)) < 0:  # a motion starts from a free pose
             continue
@@ -223,10 +238,8 @@ def test_a_motion_sweep_finds_every_collision_a_dense_sampling_finds() -> None:
         s = float(rng.choice([-1.0, 1.0]) * rng.uniform(0.05, 0.6))
         swept = kernels._motion_margin(cm.clearance, cm.blocked, p, fp.offsets_x, fp.offsets_y, planner._px,
                                        planner._py, x, y, yaw, roll1 - roll0, curv, s, math.inf)
-        poses = [(*child_pose(x, y, yaw, roll0, roll0 + f * (roll1 - roll0), 0.0, r, 0.0)[:2], yaw)
-                 for f in np.linspace(0.0, 1.0, 80)]
-        poses += [child_pose(x, y, yaw, roll0, roll1, curv, r, t) for t in np.linspace(0.0, s, 300)]
-        dense = cm.footprint_margins(fp, planner.polygon, np.array(poses)).min()
+        poses = _dense_motion(x, y, yaw, roll0, roll1, curv, s, 80, 300)
+        dense = cm.footprint_margins(fp, planner.polygon, poses).min()
         if dense < 0:
             assert swept < 0
         outcomes[swept >= 0] += 1
@@ -274,8 +287,7 @@ def test_the_shortcut_probe_decides_on_its_five_poses_per_motion() -> None:
     outcomes = {True: 0, False: 0}
     near = np.argwhere((cm.clearance > 0.3) & (cm.clearance < 1.2))
     for _ in range(600):
-        iy, ix = near[rng.integers(len(near))]
-        x, y = cm.origin_x + (ix + 0.5) * cm.resolution_m, cm.origin_y + (iy + 0.5) * cm.resolution_m
+        x, y = _cell_centre(cm, near[rng.integers(len(near))])
         yaw, roll = float(rng.uniform(-math.pi, math.pi)), float(rng.choice(planner.rolls))
         n = int(rng.integers(1, 4))
         sr = rng.choice([-ROBOT.max_roll_rad, 0.0, ROBOT.max_roll_rad], kernels.MAX_SHOT_SEGS)
@@ -312,10 +324,8 @@ def test_a_sweep_where_only_the_polygon_fits_samples_as_densely_as_the_final_che
     p = planner._params((7.825, 11.075, 0.48), True)
     x, y, yaw, roll = 7.7354849760472035, 10.405456190789181, -5.015868613556749, -0.2617993877991494
     held, curv, s = -0.1767683254557281, -0.5954426498469392, 0.09770486166568534
-    poses = [(*child_pose(x, y, yaw, roll, roll + f * (held - roll), 0.0, ROBOT.radius_m, 0.0)[:2], yaw)
-             for f in np.linspace(0.0, 1.0, 50)]
-    poses += [child_pose(x, y, yaw, roll, held, curv, ROBOT.radius_m, t) for t in np.linspace(0.0, s, 2000)]
-    assert cm.footprint_margins(fp, planner.polygon, np.array(poses)).min() < 0  # it does collide
+    dense = _dense_motion(x, y, yaw, roll, held, curv, s, 50, 2000)
+    assert cm.footprint_margins(fp, planner.polygon, dense).min() < 0  # it does collide
     swept = kernels._motion_margin(cm.clearance, cm.blocked, p, fp.offsets_x, fp.offsets_y, planner._px,
                                    planner._py, x, y, yaw, held - roll, curv, s, math.inf)
     assert swept < 0
