@@ -10,6 +10,7 @@ from matplotlib.path import Path
 from numba import njit
 
 from planner.maps.clearance import (
+    LEAST_SEED_M,
     CircleFootprint,
     ClearanceMap,
     _point_in_polygon,
@@ -99,6 +100,11 @@ def test_exact_footprint_distance_agrees_with_brute_force():
     lower = clear.circle_margins(fp, poses)
     assert np.all(lower <= fast + 1e-9)  # the circles' margin is a lower bound of the true distance
     assert clear.least_footprint_distance(robot.footprint_polygon, poses, lower) == pytest.approx(fast.min(), abs=1e-12)
+    # a bound far below the distance: the first pose's measure within bound + LEAST_SEED_M falls short and it is
+    # measured again with the full reach (the least is still exact, not the short measure's cap)
+    loose = fast - 0.5
+    assert loose.min() + LEAST_SEED_M < fast.min()
+    assert clear.least_footprint_distance(robot.footprint_polygon, poses, loose) == pytest.approx(fast.min(), abs=1e-12)
 
 
 def test_leaving_the_map_is_a_collision():
