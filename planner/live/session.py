@@ -143,6 +143,10 @@ class ReplanEvent:
 
 SPLICE_CLEAR_M = 1.0
 """A replan is spliced onto the old path only where that leaves at least this much of it before the blockage."""
+SPLICE_SHARE = 0.75
+"""A spliced replan's search from the splice point gets this share of the time limit; when it finds nothing the
+search from the robot gets what is left (at least the rest of the share), so that the replan as a whole keeps
+about its limit (it took up to 1.25 × the limit when the first search ran out of time)."""
 
 
 def _spliced(prefix: np.ndarray, result: PlanResult) -> PlanResult:
@@ -347,12 +351,12 @@ class LiveSession:
                 old, i = self.path.states, self._progress.index
                 try:
                     x, y, yaw = (float(v) for v in old[splice, :3])
-                    result, method = self._search((x, y, yaw), self.goal, limit)
+                    result, method = self._search((x, y, yaw), self.goal, SPLICE_SHARE * limit)
                 except (BadEndpoint, PlannerCancelled, InvalidInput):
                     raise
                 except PlanningError:
                     splice = None  # from the splice point nothing was found: try from where the robot is
-                    left = max(limit - (time.perf_counter() - t_search), 0.25 * limit)
+                    left = max(limit - (time.perf_counter() - t_search), (1.0 - SPLICE_SHARE) * limit)
                     result, method = self._search(start, self.goal, left)
                 else:
                     start = result.start

@@ -3,13 +3,16 @@ observation blocks its path (checked with the footprint), reports why and how lo
 
 from __future__ import annotations
 
+import time
+
 import numpy as np
 import pytest
 
-from planner.errors import InvalidInput
+from planner.errors import InvalidInput, PlannerTimedOut
 from planner.hybrid_astar.search import HybridAStar, PlannerOptions
 from planner.live import LiveMap, LiveSession, ObstacleLayerParams, PointObservation, ReplanPolicy
 from planner.live.refresh import cap_m, capped, exact_reach_m, refresh
+from planner.live.session import SPLICE_SHARE
 from planner.maps.clearance import least_footprint_distance
 from planner.occupancy import OccupancyGrid
 from planner.robot import load_robot
@@ -125,6 +128,31 @@ def test_live_options_default_and_yield_to_given_ones() -> None:
         live_options({"greedy": 1.0})
     assert err.value.field == "options.greedy"
     assert ExploreOptions().planner == live_options()
+
+
+def test_a_spliced_replan_keeps_its_time_limit(monkeypatch: pytest.MonkeyPatch) -> None:
+    """The search from the splice point gets SPLICE_SHARE of the limit; when it runs out, the search from the robot
+    gets the rest (not a quarter of the limit more): the replan as a whole keeps about its limit."""
+    live = LiveMap(corridor(), ObstacleLayerParams.for_robot(ROBOT))
+    session = LiveSession(live, ROBOT, policy=ReplanPolicy(time_limit_s=0.4))
+    session.set_pose(START)
+    assert session.set_goal(GOAL).ok
+    session.set_pose((3.0, 5.0, 0.0))
+    limits: list[float] = []
+    real = session._search
+
+    def search(start: tuple[float, float, float], goal: tuple[float, float, float], limit: float) -> object:
+        limits.append(limit)
+        if len(limits) == 1:  # the splice point's search uses its whole budget and finds nothing
+            time.sleep(limit)
+            raise PlannerTimedOut("no path found within the time limit", planning_time_s=limit)
+        return real(start, goal, limit)
+
+    monkeypatch.setattr(session, "_search", search)
+    _, event = session.observe(PointObservation(wall_points(10.0, 0.05, 7.5), np.array([4.0, 5.0, 0.3])))
+    assert event is not None and event.ok and event.spliced_m == 0.0 and event.start == (3.0, 5.0, 0.0)
+    assert limits[0] == pytest.approx(SPLICE_SHARE * 0.4)
+    assert limits[1] == pytest.approx((1 - SPLICE_SHARE) * 0.4, abs=0.02)  # the rest, not 0.25 × the limit more
 
 
 def test_a_still_robot_or_no_lead_replans_from_the_current_pose() -> None:
