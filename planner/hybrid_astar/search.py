@@ -92,11 +92,12 @@ FORWARD_CHECK_BUDGET = 1_000  # ... unless a forward-only search from the goal e
 _LOOP = threading.local()  # the current thread's plan: its clock, its seconds in the compiled loop (search_loop_time_s)
 GROWTH_MARGIN = 2.5  # a search's storage grows only when this × its last growth's time still fits before the deadline
 # Smoothing's recheck rule (kernels.shortcut): a target whose shot failed from a knot just before is retried only
-# every this many knots, in the later passes and in the first. 1 = every candidate from every knot (the default):
-# with 3 and 2 the shots built halve, but the explore sweep's warehouse-aisle world, reached with 0.22 m of
-# clearance when every candidate is tried, collided in closed loop (docs/planning.md).
-SMOOTH_RECHECK = 1
-SMOOTH_RECHECK_FIRST = 1
+# every this many knots, in the later passes and in the first (1 = every candidate from every knot). On the 180
+# real-map problems of seeds 0–2 it cuts the smoothing time by a third for paths 0.03–0.07 % shorter in all
+# (issue 21, sixth round). It was off from the third round to the sixth: the explore sweep's warehouse-aisle world
+# collided with it, which it no longer does since the fifth round's margins (docs/planning.md).
+SMOOTH_RECHECK = 3
+SMOOTH_RECHECK_FIRST = 2
 # The later smoothing passes (on the path subdivided to the search step) try this share of smooth_max_tries targets
 # per knot: on the 60 real-map problems half the targets cut the smoothing time by a third (the median plan by a
 # quarter) for paths 0.26 % longer in all (docs/planning.md, fourth round).
@@ -652,7 +653,7 @@ class HybridAStar:
         LATER_PASS_TRIES × ``smooth_max_tries`` targets per knot. A target whose shot failed
         from a knot just before is tried again only every SMOOTH_RECHECK_FIRST knots in the first pass (on the
         search's motions) and every SMOOTH_RECHECK knots in the later ones (on the path subdivided to the search
-        step), see ``kernels.shortcut`` (both 1 by default: every candidate). ``counts`` (int64, 4), when given,
+        step), see ``kernels.shortcut``. ``counts`` (int64, 4), when given,
         is added to as ``kernels.shortcut`` says."""
         if not o.smooth:
             return motions
