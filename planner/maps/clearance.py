@@ -123,8 +123,15 @@ def _covering_of(polygon: tuple[tuple[float, ...], ...], max_circles: int) -> Ci
 
 
 def inscribed_radius(polygon: np.ndarray) -> float:
-    """Radius (m) of the largest disc centred on the robot's origin that fits inside the polygon."""
-    poly = np.asarray(polygon, float)
+    """Radius (m) of the largest disc centred on the robot's origin that fits inside the polygon (kept per polygon:
+    every plan asks it for its footprint)."""
+    poly = np.ascontiguousarray(polygon, dtype=float)
+    return _inscribed_radius(poly.tobytes(), poly.shape[0])
+
+
+@lru_cache(maxsize=32)
+def _inscribed_radius(data: bytes, n: int) -> float:
+    poly = np.frombuffer(data, dtype=float).reshape(n, 2)
     a, b = poly, np.roll(poly, -1, axis=0)
     ab = b - a
     t = np.clip(-(a * ab).sum(axis=1) / np.maximum((ab * ab).sum(axis=1), 1e-300), 0.0, 1.0)
