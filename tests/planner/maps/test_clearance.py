@@ -107,6 +107,20 @@ def test_exact_footprint_distance_agrees_with_brute_force():
     assert clear.least_footprint_distance(robot.footprint_polygon, poses, loose) == pytest.approx(fast.min(), abs=1e-12)
 
 
+def test_least_footprint_distance_keeps_a_reach_under_its_first_measure() -> None:
+    """A reach under LEAST_SEED_M and a lower bound below 0: the least is capped at the reach, never the first pose's
+    measure within bound + LEAST_SEED_M (0.15 m here)."""
+    robot = _box_robot(0.3, 0.35)
+    occ = np.zeros((80, 80), dtype=bool)
+    occ[:, 60:] = True  # a wall from x = 3.0 m; the box's front (0.3 m ahead) is 0.15 m from it at x = 2.55
+    clear = ClearanceMap(OccupancyGrid.from_occupied(occ, 0.05))
+    poses = np.array([[2.55, 2.0, 0.0], [2.5, 2.0, 0.0]])
+    assert clear.footprint_distances(robot.footprint_polygon, poses)[0] == pytest.approx(0.15)
+    lower = np.array([-0.5, -0.4])
+    assert clear.least_footprint_distance(robot.footprint_polygon, poses, lower, reach_m=0.1) == 0.1
+    assert clear.least_footprint_distance(robot.footprint_polygon, poses, lower, reach_m=1.0) == pytest.approx(0.15)
+
+
 def test_leaving_the_map_is_a_collision():
     grid = OccupancyGrid.from_occupied(np.zeros((40, 40), bool), 0.1)
     fp = CircleFootprint.for_robot(load_robot())
