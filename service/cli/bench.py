@@ -32,8 +32,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--runs", type=int, default=5, help="timed runs per problem (after one warm-up)")
     parser.add_argument("--ompl-time", type=finite_float, default=10.0, help="BIT* budget, s (0 = skip)")
     parser.add_argument("--rrt-time", type=finite_float, default=2.0, help="RRT* budget, s (0 = skip)")
-    parser.add_argument("--csv", default=None, help="CSV output (default bench.csv; bench_real.csv for --suite real)")
-    parser.add_argument("--png", default=None, help="PNG output (default bench.png; bench_real.png for --suite real)")
+    parser.add_argument("--csv", default=None,
+                        help="CSV output (default bench.csv; bench_real.csv for --suite real); only the planning, "
+                             "all and real suites write one")
+    parser.add_argument("--png", default=None,
+                        help="PNG output (default bench.png; bench_real.png for --suite real); only the planning, "
+                             "all and real suites write one")
     parser.add_argument("--suite",
                         choices=("planning", "reconfigure", "mpc", "all", "real", "perception", "load", "explore"),
                         default="planning",
@@ -160,6 +164,11 @@ def _sizes(text: str) -> list[tuple[int, int]]:
 
 
 def run(args: argparse.Namespace) -> int:
+    if args.suite not in ("planning", "all", "real"):
+        for flag, value in (("--csv", args.csv), ("--png", args.png)):
+            if value is not None:  # only the planning and real suites write files: never drop what was asked
+                raise InvalidInput(flag, f"--suite {args.suite} writes no {flag[2:].upper()} (its table goes to "
+                                         "stdout); --csv and --png are for --suite planning, all and real")
     if args.suite == "real":
         return run_real(args)
     if args.suite == "load":
@@ -170,9 +179,11 @@ def run(args: argparse.Namespace) -> int:
         return fleet_main(args.duration, args.workers)
     if args.suite == "explore":
         from lab.explore_bench import main as explore_main
+        from lab.explore_worlds import sweep_specs
 
-        explore_main(args.robot, only=args.problems, quiet=quiet())
-        return 0
+        if not any(args.problems in spec.name for spec in sweep_specs()):
+            raise InvalidInput("--problems", f"no explore world matches {args.problems!r}")
+        return explore_main(args.robot, only=args.problems, quiet=quiet())  # 1 when a world's outcome is wrong
     if args.runs < 1:
         raise InvalidInput("--runs", "must be ≥ 1")
     if args.suite == "perception":

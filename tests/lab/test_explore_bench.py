@@ -70,3 +70,27 @@ def test_subset_explored_with_the_right_outcome() -> None:
     for r in replanned:
         line = next(ln for ln in table.splitlines() if ln.startswith(r.spec.name))
         assert all(f"{k} {v}" in line for k, v in r.metrics["replan_reasons"].items())
+
+
+def test_the_cli_says_what_the_sweep_found(monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]) -> None:
+    """`sphereplan bench --suite explore` exits with the sweep's own code (1 when a world's outcome is wrong, not
+    0), names a --problems that matches no world, and refuses --csv / --png, which the suite does not write."""
+    import lab.explore_bench as explore_bench
+    from service.cli import main
+
+    asked = []
+
+    def sweep(robot_name: str | None = None, tracker: str = "mpc", only: str = "", quiet: bool = False) -> int:
+        asked.append(only)
+        return 1  # a world collided
+
+    monkeypatch.setattr(explore_bench, "main", sweep)
+    assert main(["bench", "--suite", "explore", "--problems", "garage-lane1-boxes"]) == 1
+    assert asked == ["garage-lane1-boxes"]
+    assert main(["bench", "--suite", "explore", "--problems", "no-such-world"]) == 2
+    assert "--problems" in capsys.readouterr().err
+    for flag in ("--csv", "--png"):
+        assert main(["bench", "--suite", "explore", flag, "out.file"]) == 2
+        assert flag in capsys.readouterr().err
+    assert main(["bench", "--suite", "mpc", "--csv", "mpc.csv"]) == 2
+    assert asked == ["garage-lane1-boxes"]  # no sweep ran for the refused calls
