@@ -100,11 +100,26 @@ def test_exact_footprint_distance_agrees_with_brute_force():
     lower = clear.circle_margins(fp, poses)
     assert np.all(lower <= fast + 1e-9)  # the circles' margin is a lower bound of the true distance
     assert clear.least_footprint_distance(robot.footprint_polygon, poses, lower) == pytest.approx(fast.min(), abs=1e-12)
-    # a bound far below the distance: the first pose's measure within bound + LEAST_SEED_M falls short and it is
-    # measured again with the full reach (the least is still exact, not the short measure's cap)
+    # every pose above meets a cell (1 % of the cells are blocked and the box is 1.24 m long), so its distance is 0:
+    # a bound 0.5 m low changes nothing there
     loose = fast - 0.5
     assert loose.min() + LEAST_SEED_M < fast.min()
     assert clear.least_footprint_distance(robot.footprint_polygon, poses, loose) == pytest.approx(fast.min(), abs=1e-12)
+    # free poses, on the same map with only its block: distances above 0 against the brute force, and a bound 0.5 m
+    # low, under which the first pose's measure within bound + LEAST_SEED_M falls short: it is measured again with
+    # the full reach (the least is exact, not that short measure's cap)
+    occ = np.zeros((120, 120), bool)
+    occ[40:60, 50:90] = True
+    sparse = OccupancyGrid.from_occupied(occ, 0.05)
+    open_clear = ClearanceMap(sparse)
+    d_open = open_clear.footprint_distances(robot.footprint_polygon, poses, reach_m=1.0)
+    free = poses[d_open > 0.25]
+    assert len(free) >= 10
+    d_free = d_open[d_open > 0.25]
+    for pose, d in zip(free, d_free, strict=True):
+        assert d == pytest.approx(footprint_distance(sparse, robot, pose[None], reach_m=1.0), abs=1e-9)
+    assert open_clear.least_footprint_distance(robot.footprint_polygon, free, d_free - 0.5) == pytest.approx(
+        d_free.min(), abs=1e-12)
 
 
 def test_least_footprint_distance_keeps_a_reach_under_its_first_measure() -> None:
@@ -119,6 +134,9 @@ def test_least_footprint_distance_keeps_a_reach_under_its_first_measure() -> Non
     lower = np.array([-0.5, -0.4])
     assert clear.least_footprint_distance(robot.footprint_polygon, poses, lower, reach_m=0.1) == 0.1
     assert clear.least_footprint_distance(robot.footprint_polygon, poses, lower, reach_m=1.0) == pytest.approx(0.15)
+    # 0.7 m from the wall with a bound of −0.5: the measure within 0.2 m falls short, the full reach finds 0.7
+    assert clear.least_footprint_distance(robot.footprint_polygon, np.array([[2.0, 2.0, 0.0]]), np.array([-0.5]),
+                                          reach_m=1.0) == pytest.approx(0.7)
 
 
 def test_leaving_the_map_is_a_collision():
