@@ -246,3 +246,47 @@ def test_session_topics_need_the_token_and_follow_the_robot_partition(tmp_path: 
             d.close()
         node.close()
         service.close()
+
+
+def test_a_sessions_time_limit_is_the_same_at_the_http_and_zenoh_doors(doors: tuple[SessionStore, list[Any], int],
+                                                                      tmp_path: Path) -> None:
+    """The replan time limit a robot asks for (``time_limit_s``, which every replan keeps, spliced or not) is the one
+    its session gets through HTTP and through Zenoh, and one over the service's bound is refused naming the field at
+    both doors."""
+    from fastapi.testclient import TestClient
+
+    from service.http import create_app
+
+    store, _, port = doors
+    start = dict(zip(("x", "y", "yaw"), HALL_START, strict=True))
+    body = {"map": "hall", "start": start, "time_limit_s": 0.7, "replan_period_s": 3.0}
+    settings = ServiceSettings(maps_dir=make_maps(tmp_path / "http_maps"), workers=1, warm_up=False, zenoh=False)
+    app = create_app(settings)
+    with TestClient(app) as client:
+        made = client.post("/v1/sessions", json={**body, "id": "h1"})
+        assert made.status_code == 201, made.text
+        http_policy = app.state.sessions.get("h1").session.policy
+        too_long = client.post("/v1/sessions", json={**body, "time_limit_s": 11.0})
+        assert too_long.status_code == 422 and "time_limit_s" in too_long.text
+    statuses: list[dict[str, Any]] = []
+    got = threading.Condition()
+
+    def on(sample: zenoh.Sample) -> None:
+        with got:
+            statuses.append(json.loads(sample.payload.to_bytes()))
+            got.notify_all()
+
+    with zenoh.open(client_config(port)) as z:
+        z.declare_subscriber("sphereplan/r1/live/status", on)
+        time.sleep(0.5)
+        put(z, "sphereplan/r1/live/session", json.dumps(body))
+        with got:
+            assert got.wait_for(lambda: any(s.get("state") == "created" for s in statuses), 120), statuses
+        put(z, "sphereplan/r1/live/session", json.dumps({**body, "time_limit_s": 11.0}))
+        with got:
+            assert got.wait_for(lambda: any(s.get("state") == "invalid" for s in statuses), 120), statuses
+    zenoh_policy = store.get("r1").session.policy
+    assert zenoh_policy == http_policy
+    assert (zenoh_policy.time_limit_s, zenoh_policy.period_s) == (0.7, 3.0)
+    bad = next(s for s in statuses if s.get("state") == "invalid")
+    assert bad["field"] == "time_limit_s"
