@@ -33,7 +33,7 @@ from fastapi import Path as PathParam
 from fastapi.responses import JSONResponse, Response, StreamingResponse
 
 from planner.errors import InvalidInput, NoValidPathFound
-from planner.live import ObstacleLayerParams, ReplanEvent, ReplanPolicy, live_options
+from planner.live import ObstacleLayerParams, ReplanEvent, live_options
 from planner.occupancy import UNKNOWN, OccupancyGrid
 from service.core import PlanningService
 from service.outcome import outcome_of_exception
@@ -114,7 +114,7 @@ async def create_session(request: Request, body: SessionCreate, service: Service
         robot = service.robot_profile(body.robot)
         grid, name = session_grid(service, body, robot, store.limits.max_cells)
         options = live_options(body.options)
-        policy = ReplanPolicy(body.replan_period_s, body.time_limit_s or 2.0)
+        policy = body.policy()
         base = ObstacleLayerParams.for_robot(robot)
         layer = body.layer.params(base) if body.layer is not None else base
         entry, event = store.create(client_of(request), grid, robot, body.start.as_pose(),

@@ -15,6 +15,7 @@ from pydantic import Field, model_validator
 from planner.errors import InvalidInput
 from planner.live.observations import Observation, PointObservation, RegionUpdate, ScanObservation, SensorPose
 from planner.live.obstacle_layer import ObstacleLayerParams
+from planner.live.session import ReplanPolicy
 from service.wire import Angle, MapSpec, Metres, Name, PoseIn, _Strict
 
 MAX_WIRE_POINTS = 100_000
@@ -69,6 +70,12 @@ class SessionCreate(_Strict):
         if (self.map is None) == (self.unknown is None):
             raise ValueError("give exactly one of map and unknown")
         return self
+
+    def policy(self) -> ReplanPolicy:
+        """The session's replan policy: the time limit and period asked for, ReplanPolicy's defaults for the rest
+        (the one place every door makes it)."""
+        return ReplanPolicy(self.replan_period_s, ReplanPolicy.time_limit_s if self.time_limit_s is None
+                            else self.time_limit_s)
 
 
 class SensorPoseIn(_Strict):

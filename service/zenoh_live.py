@@ -121,7 +121,7 @@ class LiveZenohNode:
                 raise InvalidInput("id", "is the robot id of the key expression; leave it out")
             if robot_id in self.store.ids():
                 self.store.delete(robot_id)
-            from planner.live import ObstacleLayerParams, ReplanPolicy, live_options
+            from planner.live import ObstacleLayerParams, live_options
 
             robot = self.service.robot_profile(body.robot)
             grid, name = session_grid(self.service, body, robot, self.store.limits.max_cells)
@@ -129,7 +129,7 @@ class LiveZenohNode:
             base = ObstacleLayerParams.for_robot(robot)
             entry, event = self.store.create(
                 f"zenoh:{robot_id}", grid, robot, body.start.as_pose(),
-                None, options, ReplanPolicy(body.replan_period_s, body.time_limit_s or 2.0),
+                None, options, body.policy(),
                 body.layer.params(base) if body.layer is not None else base, name, robot_id)
             entry.on_event.append(self._publish)
             self._status(robot_id, {"state": "created", "session": session_body(entry)})
