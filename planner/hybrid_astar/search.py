@@ -88,7 +88,7 @@ FORWARD_RETRY_PER_M = 250  # expansions a forward-only search may take to find a
 FORWARD_RETRY_MIN = 1_000  # ... at least this many
 FORWARD_RETRY_MAX = 20_000  # ... and at most this many (docs/planning.md: the budgets the accepted paths needed)
 FORWARD_RETRY_SHARE = 0.5  # ... tried when the path found rolls more than this share of its length backwards
-FORWARD_CHECK_BUDGET = 1_000  # ... unless a forward-only search from the goal exhausts within this many (a dead end)
+FORWARD_CHECK_BUDGET = 600  # ... unless a forward-only search from the goal exhausts within this many (a dead end)
 _LOOP = threading.local()  # the current thread's plan: its clock, its seconds in the compiled loop (search_loop_time_s)
 GROWTH_MARGIN = 2.5  # a search's storage grows only when this × its last growth's time still fits before the deadline
 # Smoothing's recheck rule (kernels.shortcut): a target whose shot failed from a knot just before is retried only

@@ -139,6 +139,22 @@ def test_a_goal_that_cannot_be_approached_forwards_skips_the_forward_search() ->
         START, GOAL, o, Termination(10).start(), reverse=False, budget=FORWARD_CHECK_BUDGET) is None
 
 
+def test_the_forward_check_budget_still_proves_the_deepest_dead_end_seen() -> None:
+    """pockets#8 of the real-map bench's seed-1 draw: the deepest goal pocket over seeds 0–5 (360 problems) whose
+    forward-only check exhausts, after 516 expansions (the next ones 497 and 348; one more at 833 is given up). The
+    check's budget was cut from 1 000 (it runs to its budget on every plan whose goal can be approached forwards: 68
+    of those 360 plans) but still proves this one, so the forward search is not run."""
+    from planner.hybrid_astar.search import FORWARD_CHECK_BUDGET
+
+    grid = load_map("maps/real/pockets.yaml")
+    start, goal = (8.925, 3.525, 2.0387814393209416), (6.975, 17.375, 1.7503720758899775)
+    o = PlannerOptions()
+    result = HybridAStar(grid, ROBOT, o).plan(start, goal)
+    assert check_path(grid, ROBOT, result.states, start, goal) == []
+    assert 500 < result.extra["forward_check_expansions"] <= FORWARD_CHECK_BUDGET
+    assert "forward_alternative_expansions" not in result.extra
+
+
 def test_the_forward_search_gets_a_budget_by_distance() -> None:
     """smoothers_world#8 of the real-map bench (seed 0): the path rolls mostly backwards, a forward-only goal check
     does not exhaust, and no cheaper forward path exists within reach. The forward search is given 250
