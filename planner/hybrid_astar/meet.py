@@ -18,6 +18,13 @@ shot). A goal-side node is used only upright (held roll 0), so the shot ends upr
 starts. The joined path is checked like every goal-side path (rolled from the true start, exact footprint).
 
 The first join found is returned, as the first path of either search is: the smoother shortens it after.
+
+A join by a shot needs the two trees to roll the shared way in the same direction. When each side rolled it the
+other way round (a goal that faces back the way the start came: the forward tree arrives facing away from the
+goal's heading, the goal side's the same at the start), both sides have to turn round in the narrow far end, state
+by state. :func:`find_turn` finds where the two trees hold nodes in one cell with opposite headings, the roomiest
+such cell first; :meth:`two_ended.GoalSide.meet` then searches the turn between the two poses there with a small
+budget (a turn in a wider place than either end).
 """
 
 from __future__ import annotations
@@ -111,6 +118,35 @@ def find_pairs(node_f: np.ndarray, node_i: np.ndarray, lo: int, hi: int, turn: f
     return n
 
 
+@njit(cache=True)
+def find_turn(f_node: np.ndarray, b_node: np.ndarray, f_node_f: np.ndarray, f_node_i: np.ndarray, upright: int,
+              nyaw: int, clear: np.ndarray, ox: float, oy: float, res: float, tried: np.ndarray
+              ) -> tuple[int, int, int]:
+    """Where the forward tree and the goal side roll the same way in opposite directions: the (forward node,
+    goal-side node, cell) of the bucket pair in one cell whose forward node is upright and whose heading bin is
+    opposite to the goal-side node's (both in the forward frame), in the untried cell (``tried``) with the most
+    stored clearance under the forward node; (-1, -1, -1) when there is none."""
+    best = -1.0
+    out_i, out_j, out_cell = -1, -1, -1
+    half = nyaw // 2
+    for b in range(f_node.size):
+        i = f_node[b]
+        if i < 0 or f_node_i[i, 1] != upright:
+            continue
+        cell = b // nyaw
+        if tried[cell]:
+            continue
+        j = b_node[cell * nyaw + (b % nyaw + half) % nyaw]
+        if j < 0:
+            continue
+        ix = int(math.floor((f_node_f[i, 0] - ox) / res))
+        iy = int(math.floor((f_node_f[i, 1] - oy) / res))
+        if 0 <= ix < clear.shape[1] and 0 <= iy < clear.shape[0] and clear[iy, ix] > best:
+            best = clear[iy, ix]
+            out_i, out_j, out_cell = i, j, cell
+    return out_i, out_j, out_cell
+
+
 def warm_up() -> None:
     """Compile (or load from numba's cache) the look-up kernels on a one-node tree, with the argument types of
     :meth:`Meeting.round`, so that no plan's time limit is spent on it (a plan meets only after thousands of
@@ -121,6 +157,7 @@ def warm_up() -> None:
     index_nodes(node_f, node_i, 0, 1, math.pi, 0, *geo, node, g)
     out_a, out_b, out_cost = np.zeros(1, dtype=np.int64), np.zeros(1, dtype=np.int64), np.zeros(1)
     find_pairs(node_f, node_i, 0, 1, 0.0, -1, node_f, math.pi, node, *geo, 1.0, MAX_SHOT_M, out_a, out_b, out_cost)
+    find_turn(node, node, node_f, node_i, 0, YAW_BINS, np.zeros((1, 1)), 0.0, 0.0, 1.0, np.zeros(1, dtype=np.bool_))
 
 
 class Meeting:
@@ -209,4 +246,4 @@ class Meeting:
         return None if best is None else best[1:]
 
 
-__all__ = ["CELL_M", "YAW_BINS", "Meeting", "find_pairs", "index_nodes", "warm_up"]
+__all__ = ["CELL_M", "YAW_BINS", "Meeting", "find_pairs", "find_turn", "index_nodes", "warm_up"]

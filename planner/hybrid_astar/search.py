@@ -387,7 +387,7 @@ class HybridAStar:
                                                self.heuristic_factor)
 
     def holonomic(self, goal_xy: tuple[float, float], start_xy: tuple[float, float] | None = None,
-                  stop_factor: float = STOP_FACTOR) -> HolonomicHeuristic:
+                  stop_factor: float = STOP_FACTOR, cache: bool = True) -> HolonomicHeuristic:
         """The holonomic cost-to-go table towards ``goal_xy`` (eq. 14g), computed exactly only around the way to
         ``start_xy`` when it is given (:class:`HolonomicHeuristic`, ``stop_factor`` its extent). A cached table
         towards the start's cell (the forward one, when this is the goal side's table towards the start) guides
@@ -395,12 +395,13 @@ class HybridAStar:
 
         Tables are cached per goal cell (Nav2 caches its obstacle heuristic the same way): a replan towards
         the same goal reuses the table when it is exact along the new start's cheapest way (any table is
-        admissible everywhere; beyond its exact part it is only less informed).
+        admissible everywhere; beyond its exact part it is only less informed). ``cache`` False neither reads
+        nor keeps one (a search for a turn between two trees must not push the plan's own tables out).
         """
         cell = self.grid.resolution_m * self.heuristic_factor
         ox, oy = self.clearance.origin_x, self.clearance.origin_y
         key = (math.floor((goal_xy[0] - ox) / cell), math.floor((goal_xy[1] - oy) / cell))
-        cached = self._heuristics.get(key)
+        cached = self._heuristics.get(key) if cache else None
         if cached is not None and (start_xy is None or cached.covers(start_xy)):
             self._heuristics.move_to_end(key)
             return cached
@@ -408,6 +409,8 @@ class HybridAStar:
             (math.floor((start_xy[0] - ox) / cell), math.floor((start_xy[1] - oy) / cell)))
         heur = HolonomicHeuristic(self.holonomic_mult, (ox, oy), cell, goal_xy, start_xy, stop_factor,
                                   guide=None if towards_start is None else towards_start.table)
+        if not cache:
+            return heur
         self._heuristics[key] = heur
         while len(self._heuristics) > HEURISTIC_CACHE_SIZE:
             self._heuristics.popitem(last=False)
@@ -527,6 +530,9 @@ class HybridAStar:
         if side is not None:
             expansions += side.expansions
             extra["goal_side_expansions"] = side.expansions
+            if side.turns:
+                extra["turn_searches"] = side.turns
+                extra["turn_expansions"] = side.turn_expansions
         bound = side.met_cost if met and side is not None else self._search_cost(found)
         if self.reverse and o.prefer_forward:
             checked: list[int] = []

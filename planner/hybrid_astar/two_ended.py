@@ -32,7 +32,7 @@ import numpy as np
 
 from planner.hybrid_astar import kernels
 from planner.hybrid_astar.heuristics import GOAL_SIDE_STOP_FACTOR
-from planner.hybrid_astar.meet import Meeting
+from planner.hybrid_astar.meet import Meeting, find_turn
 from planner.hybrid_astar.reeds_shepp import MAX_SHOT_M
 from planner.kinematics import wrap
 
@@ -41,6 +41,8 @@ from planner.kinematics import wrap
 Pose = tuple[float, float, float]
 Motion = tuple[float, float, float]
 
+TURN_BUDGET = 1_000  # expansions of one search for a turn between the trees (meet.find_turn)
+TURN_TRIES = 12  # ... and at most this many such searches per plan
 GAP_NODES = 12  # nodes back along a tolerance-hit path from which a shot to the exact start is tried
 
 
@@ -95,10 +97,16 @@ class GoalSide:
         #: the path joins the two trees (meet.py): the shot's segment count and the search cost of the join
         self.met_segments = 0
         self.met_cost = math.inf
+        self.new_search = new_search
+        #: searches for a turn between the trees (:meth:`_turn`) and their expansions
+        self.turns = 0
+        self.turn_expansions = 0
+        self._turn_tried: np.ndarray | None = None
 
     @property
     def expansions(self) -> int:
-        return self.run.expansions
+        """This side's expansions, its searches for a turn between the trees included."""
+        return self.run.expansions + self.turn_expansions
 
     @property
     def analytic(self) -> int:
@@ -133,7 +141,7 @@ class GoalSide:
             self.meeting = Meeting(self.planner)
         hit = self.meeting.round(forward, self.run)
         if hit is None:
-            return False
+            return self._turn(forward)
         i, j, n = hit
         mt, pl = self.meeting, self.planner
         shot = [(float(mt.seg_roll[m]), float(mt.seg_curv[m]), float(mt.seg_len[m])) for m in range(n)]
@@ -146,6 +154,50 @@ class GoalSide:
         self.met_cost = (float(forward.node_f[i, 4]) + float(self.run.node_f[j, 4])
                          + float(kernels._shot_cost(forward.p, int(forward.node_i[i, 2]), mt.seg_len, n)))
         return True
+
+    def _turn(self, forward: Any) -> bool:
+        """No shot joined the trees this round: where they hold nodes in one cell with opposite headings (each side
+        rolled the shared way the other way round), search the turn between them, the roomiest such cell first
+        (:func:`meet.find_turn`), each within TURN_BUDGET expansions, at most TURN_TRIES per plan. The search runs
+        with the planner's own motions from the forward node's pose to the goal-side node's (turned into the
+        forward frame) and ends only on an exact shot to it (no tolerance), so the goal side's chain follows on
+        exactly. True (and :attr:`motions` set) when a turn joins them into a path that passes the exact check."""
+        mt, pl = self.meeting, self.planner
+        assert mt is not None
+        if self._turn_tried is None:
+            self._turn_tried = np.zeros(mt.nx * mt.ny, dtype=np.bool_)
+        while self.turns < TURN_TRIES:
+            i, j, cell = find_turn(mt.f_node, mt.b_node, forward.node_f, forward.node_i, mt.upright,
+                                   mt.f_node.size // (mt.nx * mt.ny), pl.clearance.clearance, pl.clearance.origin_x,
+                                   pl.clearance.origin_y, pl.grid.resolution_m, self._turn_tried)
+            if i < 0:
+                return False
+            self.turns += 1
+            self._turn_tried[cell] = True
+            start = (float(forward.node_f[i, 0]), float(forward.node_f[i, 1]), float(forward.node_f[i, 2]))
+            bx, by, byaw = (float(v) for v in self.run.node_f[j, :3])
+            goal = (bx, by, wrap(byaw + math.pi))
+            run = self.new_search(pl, start, goal, pl.holonomic(goal[:2], start[:2], cache=False), self.o,
+                                  pl.reverse)
+            run.p[kernels.P_TOL_XY] = 0.0
+            run.p[kernels.P_TOL_YAW] = 0.0
+            status = kernels.EXHAUSTED
+            while run.expansions < TURN_BUDGET:
+                status = run.step(min(pl.chunk_expansions(self.o), TURN_BUDGET - run.expansions))
+                if status in (kernels.FOUND, kernels.EXHAUSTED):
+                    break
+            self.turn_expansions += run.expansions
+            if status != kernels.FOUND:
+                continue
+            motions = pl._chain(forward, i) + pl._motions(run) + goal_side_motions(pl._chain(self.run, j))
+            if not self._valid(motions):
+                self.dropped += 1
+                continue
+            self.motions = motions
+            self.met_segments = max(1, int(run.counters[kernels.C_SHOT_SEGS]))
+            self.met_cost = float(forward.node_f[i, 4]) + float(self.run.node_f[j, 4]) + pl._search_cost(run)
+            return True
+        return False
 
     def _close_gap(self) -> bool:
         """The search ended within the goal tolerance of the start: shoot to the exact start from the node it

@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 
 from planner.errors import NoValidPathFound
-from planner.hybrid_astar import search
-from planner.hybrid_astar.meet import CELL_M, YAW_BINS, find_pairs, index_nodes
+from planner.hybrid_astar import search, two_ended
+from planner.hybrid_astar.meet import CELL_M, YAW_BINS, find_pairs, find_turn, index_nodes
 from planner.hybrid_astar.search import HybridAStar, PlannerOptions
 from planner.maps.nav2 import load_map
 from planner.robot import load_robot
@@ -92,3 +92,59 @@ def test_a_problem_solved_before_the_join_starts_is_unchanged(monkeypatch):
     alone = HybridAStar(grid, ROBOT).plan(start, goal)
     assert joined.expansions == alone.expansions < 10_000
     assert joined.length_m == alone.length_m and joined.extra["found_from"] == "goal"
+
+
+def _turn(forward, back, clear, tried=()):
+    """find_turn over a 20 m × 20 m map whose stored clearance is ``clear`` (a function of x, y on a 0.1 m grid)."""
+    nx = ny = 40
+    geo = (0.0, 0.0, CELL_M, nx, ny, YAW_BINS)
+    f_node, b_node = (np.full(nx * ny * YAW_BINS, -1, dtype=np.int64) for _ in range(2))
+    f_g, b_g = (np.full(nx * ny * YAW_BINS, np.inf) for _ in range(2))
+    index_nodes(forward[0], forward[1], 0, len(forward[0]), 0.0, -1, *geo, f_node, f_g)
+    index_nodes(back[0], back[1], 0, len(back[0]), math.pi, UPRIGHT, *geo, b_node, b_g)
+    xs = (np.arange(200) + 0.5) * 0.1
+    grid = np.array([[clear(x, y) for x in xs] for y in xs])
+    done = np.zeros(nx * ny, dtype=np.bool_)
+    for cell in tried:
+        done[cell] = True
+    return find_turn(f_node, b_node, forward[0], forward[1], UPRIGHT, YAW_BINS, grid, 0.0, 0.0, 0.1, done)
+
+
+def test_a_turn_is_sought_where_the_trees_hold_opposite_headings_in_one_cell_the_roomiest_first():
+    # two cells where the goal side faces (in the forward frame) the other way round from the forward tree, one where
+    # it faces the same way (a shot joins those), one where the forward node is not upright
+    forward = _nodes([(5.1, 5.1, 0.3, UPRIGHT, 1.0), (12.1, 5.1, 0.3, UPRIGHT, 1.0), (8.1, 8.1, 0.3, UPRIGHT, 1.0),
+                      (15.1, 15.1, 0.3, 2, 1.0)])
+    back = _nodes([(5.2, 5.2, 0.3, UPRIGHT, 2.0), (12.2, 5.2, 0.3, UPRIGHT, 2.0),  # forward frame: 0.3 + π
+                   (8.2, 8.2, 0.3 + math.pi, UPRIGHT, 2.0),                         # forward frame: 0.3
+                   (15.2, 15.2, 0.3, UPRIGHT, 2.0)])
+    i, j, cell = _turn(forward, back, lambda x, y: 1.0 if x > 10 else 0.5)  # more room on the right
+    assert (i, j) == (1, 1) and cell == 10 * 40 + 24
+    i, j, cell = _turn(forward, back, lambda x, y: 1.0 if x > 10 else 0.5, tried=[cell])
+    assert (i, j) == (0, 0)
+    assert _turn(forward, back, lambda x, y: 1.0, tried=[10 * 40 + 24, 10 * 40 + 10]) == (-1, -1, -1)
+
+
+def _turn_round_in_a_corridor():
+    """pockets#1 of the real-map bench's seed-1 draw: the start faces up a 1.3 m corridor that bends into another, the
+    goal faces back the way the start came. The forward tree reaches the goal's end facing away from its heading, the
+    goal side reaches the start's end the same way, and each turns round there state by state (128 k expansions and
+    about a second before the turn search between the trees)."""
+    grid = load_map("maps/real/pockets.yaml")
+    return grid, (18.675, 13.375, 0.7312609262013985), (23.025, 17.175, 2.609458811313899)
+
+
+def test_two_trees_that_roll_the_way_in_opposite_directions_are_joined_by_a_turn(monkeypatch):
+    grid, start, goal = _turn_round_in_a_corridor()
+    cap = Termination(time_limit_s=120.0, max_iterations=40_000)
+    result = HybridAStar(grid, ROBOT).plan(start, goal, cap)
+    assert result.extra["found_from"] == "both"
+    assert 1 <= result.extra["turn_searches"] <= two_ended.TURN_TRIES
+    assert 0 < result.extra["turn_expansions"] <= two_ended.TURN_TRIES * two_ended.TURN_BUDGET
+    assert result.expansions < 20_000
+    assert np.allclose(result.states[0, :3], start, atol=1e-9)
+    assert check_path(grid, ROBOT, result.states, start, goal) == []  # rollable, collision-free, at the goal
+    # without the turn search the same cap is not enough
+    monkeypatch.setattr(two_ended, "TURN_TRIES", 0)
+    with pytest.raises(NoValidPathFound):
+        HybridAStar(grid, ROBOT).plan(start, goal, cap)
