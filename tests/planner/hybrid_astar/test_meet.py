@@ -148,3 +148,21 @@ def test_two_trees_that_roll_the_way_in_opposite_directions_are_joined_by_a_turn
     monkeypatch.setattr(two_ended, "TURN_TRIES", 0)
     with pytest.raises(NoValidPathFound):
         HybridAStar(grid, ROBOT).plan(start, goal, cap)
+
+
+def test_a_look_for_a_turn_that_finds_no_place_is_not_repeated_every_round(monkeypatch):
+    """A look scans every bucket of the map (1.4 ms on the 100 m field); meeting rounds come every chunk. When a look
+    finds no cell with opposite headings, the next waits TURN_LOOK_EVERY expansions of both sides."""
+    grid, start, goal = _turn_round_in_a_corridor()
+    looks = []
+
+    def nowhere(*args):
+        looks.append(1)
+        return -1, -1, -1
+
+    monkeypatch.setattr(two_ended, "find_turn", nowhere)
+    cap = Termination(time_limit_s=120.0, max_iterations=30_000)
+    with pytest.raises(NoValidPathFound):
+        HybridAStar(grid, ROBOT).plan(start, goal, cap)
+    # the two sides make up to 2 × 30 000 expansions, the first look after search.MEET_AFTER
+    assert 1 <= len(looks) <= (2 * 30_000 - search.MEET_AFTER) // two_ended.TURN_LOOK_EVERY + 1
