@@ -164,7 +164,8 @@ class GoalSide:
         such cell, none is looked for again until both sides have made TURN_LOOK_EVERY more expansions (a look scans
         every bucket: 1.4 ms on a 100 m map). The search runs with the planner's own motions from the forward
         node's pose to the goal-side node's (turned into the forward frame) and ends only on an exact shot to it (no
-        tolerance), so the goal side's chain follows on exactly. True (and :attr:`motions` set) when a turn joins them into a path that passes the exact check."""
+        tolerance), so the goal side's chain follows on exactly. True (and :attr:`motions` set) when a turn joins
+        them into a path that passes the exact check."""
         mt, pl = self.meeting, self.planner
         assert mt is not None
         if self._turn_tried is None:
