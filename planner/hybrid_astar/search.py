@@ -269,6 +269,7 @@ class _Search:
         self.planner = planner
         self.heur = heur
         self.reverse = reverse
+        self.chunk = planner.chunk_expansions(o)
         p = planner._params(goal, reverse)
         p[kernels.P_HOX], p[kernels.P_HOY] = heur.origin_xy
         p[kernels.P_HCELL] = heur.cell_m
@@ -309,6 +310,17 @@ class _Search:
             return self._step(budget)
         finally:
             _LOOP.s = getattr(_LOOP, "s", 0.0) + time.perf_counter() - t0
+
+    def run_for(self, budget: int, clock: Clock) -> int:
+        """Step a chunk at a time until the search finds its goal or exhausts, has made ``budget`` expansions in
+        all, or ``clock`` runs out or is cancelled; returns the last status (RUNNING when stopped by the budget or
+        the clock). The bounded searches of a plan (the dead-end checks, a turn between two trees) run this way."""
+        status = kernels.RUNNING
+        while self.expansions < budget and not (clock.expired() or clock.cancelled()):
+            status = self.step(min(self.chunk, budget - self.expansions))
+            if status != kernels.RUNNING:
+                break
+        return status
 
     def _step(self, budget: int) -> int:
         pl = self.planner
@@ -619,7 +631,7 @@ class HybridAStar:
                 checked_goal = True  # the goal side's search is the dead-end check (5b) as well
                 side = GoalSide(self, start, goal, o, _Search)
             if side is not None and (side.step(min(self.chunk_expansions(o), cap - side.expansions))
-                                     or (run.expansions + side.expansions >= MEET_AFTER and side.meet(run))):
+                                     or (run.expansions + side.expansions >= MEET_AFTER and side.meet(run, clock))):
                 if side.motions is not None:
                     return side
                 raise NoValidPathFound(
@@ -763,17 +775,10 @@ class HybridAStar:
             return None
         heur = self.holonomic(back_goal[:2], back_start[:2], GOAL_SIDE_STOP_FACTOR)
         run = _Search(self, back_start, back_goal, heur, o, reverse)
-        exhausted = None
-        while run.expansions < budget and not clock.expired():
-            status = run.step(min(self.chunk_expansions(o), budget - run.expansions))
-            if status == kernels.EXHAUSTED:
-                exhausted = run.expansions
-                break
-            if status == kernels.FOUND:
-                break
+        status = run.run_for(budget, clock)
         if spent is not None:
             spent.append(run.expansions)
-        return exhausted
+        return run.expansions if status == kernels.EXHAUSTED else None
 
     def reaches_free(self, start: Pose, goal: Pose, motions: list[tuple[float, float, float]]) -> bool:
         """Rolled from ``start`` the motions end within the goal tolerance of ``goal`` and the footprint is free at

@@ -32,9 +32,10 @@ import numpy as np
 
 from planner.hybrid_astar import kernels
 from planner.hybrid_astar.heuristics import GOAL_SIDE_STOP_FACTOR
-from planner.hybrid_astar.meet import Meeting, find_turn
+from planner.hybrid_astar.meet import YAW_BINS, Meeting, find_turn
 from planner.hybrid_astar.reeds_shepp import MAX_SHOT_M
 from planner.kinematics import wrap
+from planner.termination import Clock
 
 # (search.py's HybridAStar, _Search and PlannerOptions are typed Any here: this module may not import search.py,
 # which imports it)
@@ -133,7 +134,7 @@ class GoalSide:
             self.dropped += 1
         return False
 
-    def meet(self, forward: Any) -> bool:
+    def meet(self, forward: Any, clock: Clock) -> bool:
         """One round of :class:`~planner.hybrid_astar.meet.Meeting` between ``forward`` (the forward search) and
         this side's tree; True (and :attr:`motions` set) when a shot joins them into a path that passes the exact
         check."""
@@ -143,7 +144,7 @@ class GoalSide:
             self.meeting = Meeting(self.planner)
         hit = self.meeting.round(forward, self.run)
         if hit is None:
-            return self._turn(forward)
+            return self._turn(forward, clock)
         i, j, n = hit
         mt, pl = self.meeting, self.planner
         shot = [(float(mt.seg_roll[m]), float(mt.seg_curv[m]), float(mt.seg_len[m])) for m in range(n)]
@@ -157,15 +158,15 @@ class GoalSide:
                          + float(kernels._shot_cost(forward.p, int(forward.node_i[i, 2]), mt.seg_len, n)))
         return True
 
-    def _turn(self, forward: Any) -> bool:
+    def _turn(self, forward: Any, clock: Clock) -> bool:
         """No shot joined the trees this round: where they hold nodes in one cell with opposite headings (each side
         rolled the shared way the other way round), search the turn between them, the roomiest such cell first
         (:func:`meet.find_turn`), each within TURN_BUDGET expansions, at most TURN_TRIES per plan; when there is no
         such cell, none is looked for again until both sides have made TURN_LOOK_EVERY more expansions (a look scans
         every bucket: 1.4 ms on a 100 m map). The search runs with the planner's own motions from the forward
         node's pose to the goal-side node's (turned into the forward frame) and ends only on an exact shot to it (no
-        tolerance), so the goal side's chain follows on exactly. True (and :attr:`motions` set) when a turn joins
-        them into a path that passes the exact check."""
+        tolerance), so the goal side's chain follows on exactly; the plan's ``clock`` stops them like the plan. True
+        (and :attr:`motions` set) when a turn joins them into a path that passes the exact check."""
         mt, pl = self.meeting, self.planner
         assert mt is not None
         if self._turn_tried is None:
@@ -173,10 +174,10 @@ class GoalSide:
         total = forward.expansions + self.run.expansions
         if total < self._turn_look_at:
             return False
-        while self.turns < TURN_TRIES:
-            i, j, cell = find_turn(mt.f_node, mt.b_node, forward.node_f, forward.node_i, mt.upright,
-                                   mt.f_node.size // (mt.nx * mt.ny), pl.clearance.clearance, pl.clearance.origin_x,
-                                   pl.clearance.origin_y, pl.grid.resolution_m, self._turn_tried)
+        while self.turns < TURN_TRIES and not (clock.expired() or clock.cancelled()):
+            i, j, cell = find_turn(mt.f_node, mt.b_node, forward.node_f, forward.node_i, mt.upright, YAW_BINS,
+                                   pl.clearance.clearance, pl.clearance.origin_x, pl.clearance.origin_y,
+                                   pl.grid.resolution_m, self._turn_tried)
             if i < 0:
                 self._turn_look_at = total + TURN_LOOK_EVERY
                 return False
@@ -189,11 +190,7 @@ class GoalSide:
                                   pl.reverse)
             run.p[kernels.P_TOL_XY] = 0.0
             run.p[kernels.P_TOL_YAW] = 0.0
-            status = kernels.EXHAUSTED
-            while run.expansions < TURN_BUDGET:
-                status = run.step(min(pl.chunk_expansions(self.o), TURN_BUDGET - run.expansions))
-                if status in (kernels.FOUND, kernels.EXHAUSTED):
-                    break
+            status = run.run_for(TURN_BUDGET, clock)
             self.turn_expansions += run.expansions
             if status != kernels.FOUND:
                 continue

@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from planner.errors import NoValidPathFound
+from planner.errors import NoValidPathFound, PlannerCancelled
 from planner.hybrid_astar import search, two_ended
 from planner.hybrid_astar.meet import CELL_M, YAW_BINS, find_pairs, find_turn, index_nodes
 from planner.hybrid_astar.search import HybridAStar, PlannerOptions
@@ -166,3 +166,30 @@ def test_a_look_for_a_turn_that_finds_no_place_is_not_repeated_every_round(monke
         HybridAStar(grid, ROBOT).plan(start, goal, cap)
     # the two sides make up to 2 × 30 000 expansions, the first look after search.MEET_AFTER
     assert 1 <= len(looks) <= (2 * 30_000 - search.MEET_AFTER) // two_ended.TURN_LOOK_EVERY + 1
+
+
+def test_a_turn_search_stops_with_the_plan(monkeypatch):
+    """The turn searches run on the plan's clock: once the plan is cancelled (or out of time), a turn search stops
+    before its next chunk and no other starts (they ran on unchecked: up to TURN_TRIES × TURN_BUDGET expansions)."""
+    grid, start, goal = _turn_round_in_a_corridor()
+    cancelled = []
+    real_look = two_ended.find_turn
+
+    def look(*args):
+        cancelled.append(True)  # the caller cancels the plan as the first look finds its place
+        return real_look(*args)
+
+    steps_after = []
+    real_step = search._Search.step
+
+    def step(self, budget):
+        if cancelled:
+            steps_after.append(budget)
+        return real_step(self, budget)
+
+    monkeypatch.setattr(two_ended, "find_turn", look)
+    monkeypatch.setattr(two_ended, "TURN_BUDGET", 10**9)  # only the clock can stop a turn search
+    monkeypatch.setattr(search._Search, "step", step)
+    with pytest.raises(PlannerCancelled):
+        HybridAStar(grid, ROBOT).plan(start, goal, Termination(60.0, cancel=lambda: bool(cancelled)))
+    assert len(cancelled) == 1 and steps_after == []
