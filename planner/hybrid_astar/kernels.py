@@ -822,7 +822,8 @@ def search_chunk(
                     return FOUND
                 # 3c. A shot that would make the path roll mostly backwards is held back: the search goes on for
                 #     HOLD_EXPANSIONS more expansions looking for a path that turns round,
-                #     and takes the cheapest held shot when it finds none (or runs dry).
+                #     and takes the cheapest held shot when it finds none (or runs dry). (When it finds one, the plan
+                #     keeps the held shot instead if that costs less: search.py, HybridAStar._plan.)
                 cost = node_f[src, 4] + _shot_cost(p, node_i[src, 2], seg_len, n)
                 if cost < p[P_HELD_COST]:
                     p[P_HELD_COST] = cost

@@ -530,6 +530,15 @@ class HybridAStar:
         met = side is not None and side.met_segments > 0  # a shot joined the two searches' trees (meet.py)
         found = run if goal_path is None or side is None else side.run  # the search that found the path
         motions = self._motions(run) if goal_path is None else list(goal_path)
+        took_held = turned_dearer = False
+        if run.counters[kernels.C_HELD_SEGS] > 0:
+            # The path was found while a mostly-backwards shot was held back (kernels 3c): the hold waits for a path
+            # that turns round, not for a dearer one. The cheaper of the two by the planner's own measure is the path.
+            held = self._motions(run, held=True)
+            if self._travel_cost(start, held, o) < self._travel_cost(start, motions, o):
+                kernels.take_held(run.counters, run.seg_roll, run.seg_curv, run.seg_len)
+                turned_dearer = not self._mostly_backwards(start, motions)  # it turned round, at a greater cost
+                motions, met, found, took_held = held, False, run, True
         raw_length = self._length(start, motions)
         t_search = time.perf_counter() - t0
         motions = self._smooth(start, motions, run.p, o)
@@ -537,6 +546,8 @@ class HybridAStar:
         extra: dict[str, Any] = {"unsmoothed_length_m": raw_length, "search_time_s": t_search,
                                  "smoothing_time_s": t_smooth,
                                  "found_from": "both" if met else "start" if found is run else "goal"}
+        if took_held:
+            extra["held_shot_taken"] = True
         analytic = side.met_segments if met and side is not None else int(found.counters[kernels.C_SHOT_SEGS])
         expansions = run.expansions
         if side is not None:
@@ -546,7 +557,8 @@ class HybridAStar:
                 extra["turn_searches"] = side.turns
                 extra["turn_expansions"] = side.turn_expansions
         bound = side.met_cost if met and side is not None else self._search_cost(found)
-        if self.reverse and o.prefer_forward:
+        if self.reverse and o.prefer_forward and not turned_dearer:
+            # (not when the search found a path that turns round and it cost more than the shot that rolls backwards)
             checked: list[int] = []
             fwd, forward = self._forward_alternative(start, goal, heur, o, clock, motions, bound,
                                                      checked)
@@ -687,6 +699,10 @@ class HybridAStar:
             motions, length = candidate, new_length
         return motions
 
+    def _mostly_backwards(self, start: Pose, motions: list[tuple[float, float, float]]) -> bool:
+        """The path rolls more than FORWARD_RETRY_SHARE of its length backwards."""
+        return sum(-s for _, _, s in motions if s < 0) > FORWARD_RETRY_SHARE * self._length(start, motions)
+
     def _travel_cost(self, start: Pose, motions: list[tuple[float, float, float]], o: PlannerOptions) -> float:
         """The path's length with the search's direction terms: reverse metres × ``reverse_penalty`` and
         ``switch_cost_m`` per cusp (the terms by which the search prefers rolling forwards)."""
@@ -720,8 +736,7 @@ class HybridAStar:
         exhausts within FORWARD_CHECK_BUDGET expansions (no forward path reaches the goal); that check's
         expansions are appended to ``checked``.
         """
-        backwards = sum(-s for _, _, s in motions if s < 0)
-        if backwards <= FORWARD_RETRY_SHARE * self._length(start, motions):
+        if not self._mostly_backwards(start, motions):
             return None, None
         cost = self._travel_cost(start, motions, o)
         if dubins_distance(*start, *goal, self.robot.min_turning_radius_m) >= cost:
@@ -865,12 +880,15 @@ class HybridAStar:
         result.extend(motions[k:])
         return result
 
-    def _motions(self, run: _Search) -> list[tuple[float, float, float]]:
-        """The path as a list of (held roll, curvature, signed arc length) motions, ending upright."""
+    def _motions(self, run: _Search, held: bool = False) -> list[tuple[float, float, float]]:
+        """The path as a list of (held roll, curvature, signed arc length) motions, ending upright: the search's
+        result, or with ``held`` the path of the shot it holds back (kernels 3c)."""
         seg_roll, seg_curv, seg_len = run.seg_roll, run.seg_curv, run.seg_len
-        n_shot = int(run.counters[kernels.C_SHOT_SEGS])
-        motions = self._chain(run, int(run.counters[kernels.C_RESULT]))
-        motions += [(float(seg_roll[i]), float(seg_curv[i]), float(seg_len[i])) for i in range(n_shot)]
+        off = kernels.MAX_SHOT_SEGS if held else 0
+        n_shot = int(run.counters[kernels.C_HELD_SEGS if held else kernels.C_SHOT_SEGS])
+        motions = self._chain(run, int(run.counters[kernels.C_HELD_NODE if held else kernels.C_RESULT]))
+        motions += [(float(seg_roll[off + i]), float(seg_curv[off + i]), float(seg_len[off + i]))
+                    for i in range(n_shot)]
         motions.append((0.0, 0.0, 0.0))
         return motions
 

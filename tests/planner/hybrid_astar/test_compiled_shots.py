@@ -175,6 +175,41 @@ def test_the_held_back_shot_is_the_path_when_the_search_runs_out() -> None:
     assert _backwards_m(result.states) > 0.95 * result.length_m
 
 
+@pytest.mark.parametrize("name, start, goal, held_cheaper, turned", [
+    # bays#8 of the real-map bench's seed-1 draw: the goal 5 m behind and to the side, in the open between the bays;
+    # the search turns round, at a greater cost than the held shot
+    ("bays", (22.575, 9.425, -1.3479617223735876), (17.575, 8.225, -0.3594680053165016), True, True),
+    # depot#4 of the seed-0 draw: the same, 21 m across the depot
+    ("depot", (25.475, 9.475, -1.5887238860805988), (4.825, 8.525, 1.0685301129273945), True, True),
+    # depot#1 of the seed-0 draw: 15 m behind, facing back; the search's own path rolls mostly backwards too
+    ("depot", (26.025, 9.575, 0.06727095832306862), (10.625, 9.575, 3.1096574102329626), True, False),
+    # warehouse#4 of the seed-1 draw: the path the search finds costs less than the held shot
+    ("warehouse", (-5.095, -6.655, -0.872198190459816), (1.445, -3.625, 2.6764117981392985), False, False),
+])
+def test_a_path_found_while_a_shot_is_held_back_gives_way_to_it_when_that_costs_less(name, start, goal,
+                                                                                     held_cheaper, turned) -> None:
+    """The search holds a mostly-backwards shot back and goes on for a path that turns round. The path is the
+    cheaper of the two by the planner's own measure (reverse metres × reverse_penalty, a switch cost a cusp): the
+    hold is for a path that turns round at no greater cost, not for a dearer one. When the search's own path did
+    turn round, the forward-only search (which looks for the same) is not run after it; when it rolled mostly
+    backwards as well, it is. (Without the goal side's search, which would find some of these paths itself, the
+    plan's search is the one run here.)"""
+    grid = load_map(f"maps/real/{name}.yaml")
+    planner = HybridAStar(grid, ROBOT, PlannerOptions(dead_end_check=False))
+    o = planner.options
+    run = _Search(planner, start, goal, planner.holonomic(goal[:2], start[:2]), o, True)
+    assert run.step(100_000) == kernels.FOUND and run.counters[kernels.C_HELD_SEGS] > 0
+    found, held = planner._motions(run), planner._motions(run, held=True)
+    assert (planner._travel_cost(start, held, o) < planner._travel_cost(start, found, o)) == held_cheaper
+    assert planner._mostly_backwards(start, found) != turned
+    result = planner.plan(start, goal)
+    assert result.extra.get("held_shot_taken", False) == held_cheaper
+    assert result.extra["unsmoothed_length_m"] == planner._length(start, held if held_cheaper else found)
+    assert check_path(grid, ROBOT, result.states, start, goal) == []
+    if held_cheaper:
+        assert ("forward_alternative_expansions" in result.extra) != turned
+
+
 def test_a_bound_prunes_what_cannot_be_cheaper() -> None:
     """The forward-only alternative is given the first path's cost as a bound: with a bound below the cheapest
     forward path the search exhausts without expanding past it; with a bound above it, it finds the path."""

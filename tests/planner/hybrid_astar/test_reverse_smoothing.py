@@ -98,7 +98,9 @@ def test_a_mostly_backwards_path_gives_way_to_a_cheaper_forward_one(garage) -> N
 
 
 def test_a_path_that_must_back_out_is_left_alone() -> None:
-    """A short back-out of a dead end is not a reason for a second search."""
+    """A back-out of a dead end is not a reason for a second search. (The search backs out and turns round; the
+    shot held back meanwhile, backwards nearly all the way and then a turn, costs less and is the path: 9.94 m and
+    cost 12.51 against 10.66 m and 12.72.)"""
     occ = np.zeros((80, 240), bool)
     occ[:2] = occ[-2:] = True
     occ[:, :2] = occ[:, -2:] = True
@@ -108,8 +110,7 @@ def test_a_path_that_must_back_out_is_left_alone() -> None:
     start, goal = (10.5, 2.0, 0.0), (2.0, 2.0, math.pi)
     result = HybridAStar(grid, ROBOT).plan(start, goal)
     assert check_path(grid, ROBOT, result.states, start, goal) == []
-    back = _backwards_m(result.states)
-    assert 0.0 < back < 0.5 * result.length_m
+    assert _backwards_m(result.states) > 0.0 and result.extra["held_shot_taken"]
     assert "forward_alternative_expansions" not in result.extra
 
 
