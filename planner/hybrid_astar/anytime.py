@@ -8,7 +8,9 @@ the forward-only alternative already weighed) to :func:`improve`, which runs imp
    holonomic table of the first) with f = g + (1 + g)·h — ARA*'s schedule of falling weights, each search started
    afresh — pruned by the search cost of the cheapest path found so far (``kernels.P_BOUND``: a child whose
    g + h exceeds it is dropped, h never exceeding the cost-to-go); its path is smoothed as usual and kept when it
-   is cheaper. The searches stop early enough to leave the last round its time;
+   is cheaper. A mostly-backwards shot it held back is its path instead when that costs less than the path it found
+   (as for the first path; ``by`` then says ``"greed g, held shot"``). The searches stop early enough to leave the
+   last round its time;
 2. **smoothing**: the best path shortcut again in up to DENSE_PASSES passes with DENSE_TRIES × the candidate
    targets per knot (on knots every search step, as the usual later passes), a pass started only when the last
    one's time (the first: estimated from the first path's smoothing) still fits before the deadline.
@@ -145,10 +147,12 @@ class Improver:
             motions, length = candidate, new_length
         return motions
 
-    def research(self, heur: HolonomicHeuristic, greed: float, until: Clock) -> tuple[list[Motion] | None, Any, bool]:
+    def research(self, heur: HolonomicHeuristic, greed: float, until: Clock
+                 ) -> tuple[list[Motion] | None, Any, bool, bool]:
         """One search with ``greed``, pruned by :attr:`bound`, until ``until``: its path (None when none was found),
-        the search and whether it ran to its end (found or exhausted, not stopped by the clock or the iteration
-        cap)."""
+        the search, whether it ran to its end (found or exhausted, not stopped by the clock or the iteration
+        cap) and whether the path is the shot it held back (chosen as for the first path,
+        ``HybridAStar._held_if_cheaper``). The path is smoothed as usual."""
         pl, o = self.planner, self.o
         run = self.new_search(pl, self.start, self.goal, heur, o, pl.reverse)
         run.p[kernels.P_GREED] = greed
@@ -159,14 +163,17 @@ class Improver:
             raise
         except PlannerTimedOut:
             self.expansions += run.expansions
-            return None, run, False
+            return None, run, False, False
         except PlanningError:  # exhausted below the bound (no cheaper path), or the iteration cap
             self.expansions += run.expansions
-            return None, run, run.expansions < self.clock.termination.max_iterations
+            return None, run, run.expansions < self.clock.termination.max_iterations, False
         self.expansions += run.expansions
         self.bound = min(self.bound, pl._search_cost(run))
         # (out of time with a held-back shot, _drive returns that shot: a path, but not the search's end)
-        return pl._motions(run), run, not until.expired()
+        finished = not until.expired()
+        found = pl._smooth(self.start, pl._motions(run), run.p, o)
+        held = pl._held_if_cheaper(self.start, run, found, o)
+        return held or found, run, finished, held is not None
 
 
 def improve(planner: HybridAStar, start: Pose, goal: Pose, heur: HolonomicHeuristic, o: PlannerOptions,
@@ -185,10 +192,10 @@ def improve(planner: HybridAStar, start: Pose, goal: Pose, heur: HolonomicHeuris
         if searches.expired():
             stop = imp.binding()
             break
-        found, run, finished = imp.research(heur, greed, searches)
+        found, run, finished, held = imp.research(heur, greed, searches)
         if found is not None:
             shots = int(run.counters[kernels.C_SHOT_SEGS])
-            imp.offer(planner._smooth(start, found, run.p, o), f"greed {greed:g}", shots)
+            imp.offer(found, f"greed {greed:g}" + (", held shot" if held else ""), shots)
         if not finished:
             stop = imp.binding()
             break

@@ -530,18 +530,15 @@ class HybridAStar:
         met = side is not None and side.met_segments > 0  # a shot joined the two searches' trees (meet.py)
         found = run if goal_path is None or side is None else side.run  # the search that found the path
         motions = self._motions(run) if goal_path is None else list(goal_path)
-        took_held = turned_dearer = False
-        if run.counters[kernels.C_HELD_SEGS] > 0:
-            # The path was found while a mostly-backwards shot was held back (kernels 3c): the hold waits for a path
-            # that turns round, not for a dearer one. The cheaper of the two by the planner's own measure is the path.
-            held = self._motions(run, held=True)
-            if self._travel_cost(start, held, o) < self._travel_cost(start, motions, o):
-                kernels.take_held(run.counters, run.seg_roll, run.seg_curv, run.seg_len)
-                turned_dearer = not self._mostly_backwards(start, motions)  # it turned round, at a greater cost
-                motions, met, found, took_held = held, False, run, True
         raw_length = self._length(start, motions)
         t_search = time.perf_counter() - t0
-        motions = self._smooth(start, motions, run.p, o)
+        smoothed = self._smooth(start, motions, run.p, o)
+        held = self._held_if_cheaper(start, run, smoothed, o)
+        took_held = held is not None
+        turned_dearer = took_held and not self._mostly_backwards(start, motions)  # it turned round, at a greater cost
+        if held is not None:
+            met, found, raw_length = False, run, self._length(start, self._motions(run))
+        motions = smoothed if held is None else held
         t_smooth = time.perf_counter() - t0 - t_search
         extra: dict[str, Any] = {"unsmoothed_length_m": raw_length, "search_time_s": t_search,
                                  "smoothing_time_s": t_smooth,
@@ -698,6 +695,21 @@ class HybridAStar:
                 break
             motions, length = candidate, new_length
         return motions
+
+    def _held_if_cheaper(self, start: Pose, run: _Search, smoothed: list[tuple[float, float, float]],
+                         o: PlannerOptions) -> list[tuple[float, float, float]] | None:
+        """The path of the shot ``run`` still holds back (kernels 3c), smoothed, when it costs less by
+        :meth:`_travel_cost` than ``smoothed``, the path found meanwhile smoothed; the held shot is then made the
+        search's result. Else None. The hold waits for a path that turns round, not for a dearer one. (Both are
+        smoothed first: the held path rolls mostly backwards, and smoothing may leave one of them so and not the
+        other, which decides whether the forward alternative runs.)"""
+        if run.counters[kernels.C_HELD_SEGS] == 0:
+            return None
+        held = self._smooth(start, self._motions(run, held=True), run.p, o)
+        if self._travel_cost(start, held, o) >= self._travel_cost(start, smoothed, o):
+            return None
+        kernels.take_held(run.counters, run.seg_roll, run.seg_curv, run.seg_len)
+        return held
 
     def _mostly_backwards(self, start: Pose, motions: list[tuple[float, float, float]]) -> bool:
         """The path rolls more than FORWARD_RETRY_SHARE of its length backwards."""

@@ -190,17 +190,18 @@ def test_a_path_found_while_a_shot_is_held_back_gives_way_to_it_when_that_costs_
                                                                                      held_cheaper, turned) -> None:
     """The search holds a mostly-backwards shot back and goes on for a path that turns round. The path is the
     cheaper of the two by the planner's own measure (reverse metres × reverse_penalty, a switch cost a cusp): the
-    hold is for a path that turns round at no greater cost, not for a dearer one. When the search's own path did
-    turn round, the forward-only search (which looks for the same) is not run after it; when it rolled mostly
-    backwards as well, it is. (Without the goal side's search, which would find some of these paths itself, the
-    plan's search is the one run here.)"""
+    hold is for a path that turns round at no greater cost, not for a dearer one (both compared smoothed). When the
+    search's own path did turn round, the forward-only search (which looks for the same) is not run after it; when
+    it rolled mostly backwards as well, it is. (Without the goal side's search, which would find some of these
+    paths itself, the plan's search is the one run here.)"""
     grid = load_map(f"maps/real/{name}.yaml")
     planner = HybridAStar(grid, ROBOT, PlannerOptions(dead_end_check=False))
     o = planner.options
     run = _Search(planner, start, goal, planner.holonomic(goal[:2], start[:2]), o, True)
     assert run.step(100_000) == kernels.FOUND and run.counters[kernels.C_HELD_SEGS] > 0
     found, held = planner._motions(run), planner._motions(run, held=True)
-    assert (planner._travel_cost(start, held, o) < planner._travel_cost(start, found, o)) == held_cheaper
+    smoothed = [planner._smooth(start, m, run.p, o) for m in (found, held)]  # compared as the plan returns them
+    assert (planner._travel_cost(start, smoothed[1], o) < planner._travel_cost(start, smoothed[0], o)) == held_cheaper
     assert planner._mostly_backwards(start, found) != turned
     result = planner.plan(start, goal)
     assert result.extra.get("held_shot_taken", False) == held_cheaper
