@@ -534,16 +534,16 @@ class HybridAStar:
         t_search = time.perf_counter() - t0
         smoothed = self._smooth(start, motions, run.p, o)
         held = self._held_if_cheaper(start, run, smoothed, o)
-        took_held = held is not None
-        turned_dearer = took_held and not self._mostly_backwards(start, motions)  # it turned round, at a greater cost
-        if held is not None:
-            met, found, raw_length = False, run, self._length(start, self._motions(run))
-        motions = smoothed if held is None else held
+        turned_dearer = held is not None and not self._mostly_backwards(start, motions)  # it turned round, dearer
+        if held is None:
+            motions = smoothed
+        else:  # the held shot is now the search's result: its unsmoothed path is _motions(run)
+            motions, met, found, raw_length = held, False, run, self._length(start, self._motions(run))
         t_smooth = time.perf_counter() - t0 - t_search
         extra: dict[str, Any] = {"unsmoothed_length_m": raw_length, "search_time_s": t_search,
                                  "smoothing_time_s": t_smooth,
                                  "found_from": "both" if met else "start" if found is run else "goal"}
-        if took_held:
+        if held is not None:
             extra["held_shot_taken"] = True
         analytic = side.met_segments if met and side is not None else int(found.counters[kernels.C_SHOT_SEGS])
         expansions = run.expansions
