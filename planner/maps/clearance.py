@@ -329,7 +329,10 @@ def _least_distance(blocked: np.ndarray, ox: float, oy: float, res: float, poses
     for k in order:
         if lower_m[k] >= best:
             break
-        d = footprint_distance(blocked, ox, oy, res, poses[k, 0], poses[k, 1], poses[k, 2], px, py, best)
+        if lower_m[k] > 0.0:  # apart from every blocked cell: no overlap test
+            d = _free_distance(blocked, ox, oy, res, poses[k, 0], poses[k, 1], poses[k, 2], px, py, best)
+        else:
+            d = footprint_distance(blocked, ox, oy, res, poses[k, 0], poses[k, 1], poses[k, 2], px, py, best)
         best = min(best, d)
         if best <= 0.0:
             break
@@ -519,12 +522,23 @@ def footprint_distance(
     corners to each polygon edge."""
     if footprint_hits(blocked, ox, oy, res, x, y, yaw, px, py):
         return 0.0
+    return _free_distance(blocked, ox, oy, res, x, y, yaw, px, py, reach_m)
+
+
+@njit(cache=True)
+def _free_distance(
+    blocked: np.ndarray, ox: float, oy: float, res: float, x: float, y: float, yaw: float,
+    px: np.ndarray, py: np.ndarray, reach_m: float,
+) -> float:
+    """:func:`footprint_distance` of a pose known not to meet a blocked cell (nor to leave the map)."""
     wx, wy = _placed(x, y, yaw, px, py)
     n = px.size
     h, w = blocked.shape
     best = reach_m
+    r_out = 0.0  # every point of the polygon lies within r_out of (x, y)
     for i in range(n):  # the map's edge
         best = min(best, wx[i] - ox, ox + w * res - wx[i], wy[i] - oy, oy + h * res - wy[i])
+        r_out = max(r_out, math.hypot(px[i], py[i]))
     ix0 = max(0, int(math.floor((wx.min() - reach_m - ox) / res)))
     ix1 = min(w - 1, int(math.floor((wx.max() + reach_m - ox) / res)))
     iy0 = max(0, int(math.floor((wy.min() - reach_m - oy) / res)))
@@ -532,16 +546,21 @@ def footprint_distance(
     # a cell no nearer to the polygon's bounding box than the best distance so far cannot beat it (every
     # vertex and edge point lies in the box); a nanometre of slack keeps rounding out of that decision
     x_lo, x_hi, y_lo, y_hi = wx.min(), wx.max(), wy.min(), wy.max()
+    # and none farther than best + r_out from (x, y) (a cell d from it is at least d − r_out from the polygon): for a
+    # round footprint the second test leaves a few cells of a wall at the best distance, the first a polygon's width
     for iy in range(iy0, iy1 + 1):
         by0 = oy + iy * res
         gap_y = max(by0 - y_hi, 0.0, y_lo - by0 - res)
-        if gap_y > best + 1e-9:
+        off_y = max(by0 - y, 0.0, y - by0 - res)
+        if gap_y > best + 1e-9 or off_y - r_out > best + 1e-9:
             continue
         for ix in range(ix0, ix1 + 1):
             if not blocked[iy, ix]:
                 continue
             bx0 = ox + ix * res
             if math.hypot(max(bx0 - x_hi, 0.0, x_lo - bx0 - res), gap_y) > best + 1e-9:
+                continue
+            if math.hypot(max(bx0 - x, 0.0, x - bx0 - res), off_y) - r_out > best + 1e-9:
                 continue
             for i in range(n):
                 gx = max(bx0 - wx[i], 0.0, wx[i] - bx0 - res)

@@ -259,3 +259,18 @@ def test_compiled_footprint_tests_give_the_plain_tests_answers(robot: RobotProfi
     dist = clear.footprint_distances(poly, poses[:1500], reach_m=1.0)
     for pose, d in zip(poses[:1500], dist, strict=True):
         assert d == pytest.approx(footprint_distance(grid, robot, pose[None], reach_m=1.0), abs=1e-9)
+
+
+def test_least_footprint_distance_is_zero_for_a_footprint_over_an_obstacle() -> None:
+    """A blocked cell wholly inside the footprint (no vertex in it, no edge across it): the least distance is 0, also
+    when that pose is not the first measured (valid but loose lower bounds: a free pose's first). Only poses whose
+    lower bound is above 0 skip the overlap test (the measure from the polygon's outline alone would put that cell
+    about 0.25 m away)."""
+    robot = _box_robot(0.3, 0.3)
+    occ = np.zeros((60, 60), dtype=bool)
+    occ[30, 30] = True  # the cell [1.50, 1.55] × [1.50, 1.55]
+    clear = ClearanceMap(OccupancyGrid.from_occupied(occ, 0.05))
+    poses = np.array([[0.8, 0.8, 0.0], [1.525, 1.525, 0.1]])
+    free = clear.footprint_distances(robot.footprint_polygon, poses[:1], reach_m=1.0)[0]
+    assert 0.3 < free < 1.0
+    assert clear.least_footprint_distance(robot.footprint_polygon, poses, np.array([-0.5, -0.1])) == 0.0
