@@ -31,14 +31,17 @@ SHOT_DUBINS, SHOT_WEIGHTED, SHOT_SHORTEST, SHOT_SECOND, SHOT_THIRD = 0, 1, 2, 3,
 # counters[] slots
 C_NODES, C_EXPANSIONS, C_SINCE_SHOT, C_RESULT, C_SHOT_SEGS, C_BEST, C_TRIED = 0, 1, 2, 3, 4, 5, 6
 C_HELD_NODE, C_HELD_SEGS, C_HELD_UNTIL = 7, 8, 9  # a mostly-backwards shot held back (see search_chunk, 3c)
-N_COUNTERS = 10
+C_FALL_NODE, C_FALL_SEGS, C_FALL_UNTIL = 10, 11, 12  # a shot that keeps less room than asked, kept to fall back on (3d)
+C_FELL_BACK = 13  # 1 when the result is that shot
+N_COUNTERS = 14
 # params[] slots (float64)
 (P_OX, P_OY, P_RES, P_RC, P_HOX, P_HOY, P_HCELL, P_RHO, P_GX, P_GY, P_GYAW, P_TOL_XY, P_TOL_YAW, P_RADIUS,
  P_STEP, P_SPACING, P_NON_STRAIGHT, P_CHANGE, P_REVERSE, P_SWITCH, P_COST_PENALTY, P_PROX_RANGE, P_GREED,
  P_SHOT_RATIO, P_MAX_ROLL, P_USE_DUBINS, P_ALLOW_REVERSE, P_N_YAW, P_USE_RS, P_RS_CELL, P_RS_HALF,
  P_PREFERRED, P_REACH, P_BEST_H, P_REJECT, P_CLOSER_H, P_HELD_COST, P_BACK_SHARE, P_BOUND, P_LONG,
- P_GCOS, P_GSIN) = range(42)  # P_GCOS, P_GSIN: cos and sin of P_GYAW (set with it, for the Reeds–Shepp table's frame)
-N_PARAMS = 42
+ P_GCOS, P_GSIN, P_FALL_WAIT) = range(43)  # P_GCOS, P_GSIN: cos and sin of P_GYAW (for the Reeds–Shepp table's frame)
+# P_FALL_WAIT: expansions a fallback shot (3d) waits for one that keeps the room asked; 0 = no fallback shots
+N_PARAMS = 43
 BEST_SHOT_EVERY = 256  # reversing: every this many expansions, a Reeds–Shepp shot from the closest node if new
 NEAR_TIE = 1.05  # the second / third cheapest Reeds–Shepp word is shot only within this ratio of the cheapest
 MAX_SHOT_SEGS = 6  # a Dubins shot has 3 segments, a Reeds–Shepp shot up to 5
@@ -382,6 +385,28 @@ def try_shot(
 
 
 @njit(cache=True)
+def _shot_or_fallback(
+    clear: np.ndarray, blocked: np.ndarray, p: np.ndarray, offx: np.ndarray, offy: np.ndarray, px: np.ndarray,
+    py: np.ndarray, x: float, y: float, yaw: float, roll: float, seg_roll: np.ndarray, seg_curv: np.ndarray,
+    seg_len: np.ndarray, max_len: float, keep: float, kind: int, fall: bool,
+) -> tuple[int, bool]:
+    """The search's shot to the goal (:func:`try_shot` with margin ``keep``): (segments, False) when it keeps the
+    margin; with ``fall``, (segments, True) when it is free but keeps less (a fallback, search_chunk 3d, in one sweep
+    that stops only at a collision); else (0, False)."""
+    n = _shot_segments(p, x, y, yaw, roll, p[P_GX], p[P_GY], p[P_GYAW], 0.0, seg_roll, seg_curv, seg_len, max_len,
+                       math.inf, kind, np.zeros(RS_MAX_SEGS, dtype=np.int64), np.zeros(RS_MAX_SEGS))
+    if n <= 0:
+        return 0, False
+    worst = shot_margin(clear, blocked, p, offx, offy, px, py, x, y, yaw, roll, seg_roll, seg_curv, seg_len, n, 0.0,
+                        0.0 if fall else keep)
+    if worst >= keep:
+        return n, False
+    if fall and worst >= 0.0:
+        return n, True
+    return 0, False
+
+
+@njit(cache=True)
 def _shot_segments(
     p: np.ndarray, x: float, y: float, yaw: float, roll: float, gx: float, gy: float, gyaw: float, groll: float,
     seg_roll: np.ndarray, seg_curv: np.ndarray, seg_len: np.ndarray, max_len: float, slack: float, kind: int,
@@ -674,6 +699,35 @@ def _shot_cost(p: np.ndarray, parent_dir: int, seg_len: np.ndarray, n: int) -> f
 
 
 @njit(cache=True)
+def take_fallback(counters: np.ndarray, seg_roll: np.ndarray, seg_curv: np.ndarray, seg_len: np.ndarray) -> None:
+    """Make the fallback shot (3d) the result."""
+    n = counters[C_FALL_SEGS]
+    for m in range(n):
+        seg_roll[m] = seg_roll[2 * MAX_SHOT_SEGS + m]
+        seg_curv[m] = seg_curv[2 * MAX_SHOT_SEGS + m]
+        seg_len[m] = seg_len[2 * MAX_SHOT_SEGS + m]
+    counters[C_RESULT] = counters[C_FALL_NODE]
+    counters[C_SHOT_SEGS] = n
+    counters[C_FALL_SEGS] = 0
+    counters[C_FELL_BACK] = 1
+
+
+@njit(cache=True)
+def _keep_fallback(counters: np.ndarray, p: np.ndarray, k: int, seg_roll: np.ndarray, seg_curv: np.ndarray,
+                   seg_len: np.ndarray, n: int) -> None:
+    """Keep the ``n`` shot segments from node ``k`` as the fallback (3d), the first one found."""
+    if counters[C_FALL_SEGS] > 0:
+        return
+    counters[C_FALL_NODE] = k
+    counters[C_FALL_SEGS] = n
+    counters[C_FALL_UNTIL] = counters[C_EXPANSIONS] + int(p[P_FALL_WAIT])
+    for m in range(n):
+        seg_roll[2 * MAX_SHOT_SEGS + m] = seg_roll[m]
+        seg_curv[2 * MAX_SHOT_SEGS + m] = seg_curv[m]
+        seg_len[2 * MAX_SHOT_SEGS + m] = seg_len[m]
+
+
+@njit(cache=True)
 def take_held(counters: np.ndarray, seg_roll: np.ndarray, seg_curv: np.ndarray, seg_len: np.ndarray) -> None:
     """Make the held-back shot (3c) the result."""
     n = counters[C_HELD_SEGS]
@@ -684,6 +738,7 @@ def take_held(counters: np.ndarray, seg_roll: np.ndarray, seg_curv: np.ndarray, 
     counters[C_RESULT] = counters[C_HELD_NODE]
     counters[C_SHOT_SEGS] = n
     counters[C_HELD_SEGS] = 0
+    counters[C_FELL_BACK] = 0
 
 
 @njit(cache=True)
@@ -715,6 +770,9 @@ def search_chunk(
         #    back, 3c, is taken once its wait is over or nothing is left to expand.)
         if counters[C_HELD_SEGS] > 0 and (heap_size[0] == 0 or counters[C_EXPANSIONS] >= counters[C_HELD_UNTIL]):
             take_held(counters, seg_roll, seg_curv, seg_len)
+            return FOUND
+        if counters[C_FALL_SEGS] > 0 and (heap_size[0] == 0 or counters[C_EXPANSIONS] >= counters[C_FALL_UNTIL]):
+            take_fallback(counters, seg_roll, seg_curv, seg_len)  # (3d)
             return FOUND
         if heap_size[0] == 0:
             return EXHAUSTED
@@ -784,9 +842,17 @@ def search_chunk(
             # shot graze every wall on its way, maze_across 33.8 -> 36.3 m)
             here = _pose_margin(clear, blocked, p, offx, offy, px, py, x, y, yaw)
             keep = max(0.0, min(p[P_PREFERRED], max(LEAST_KEPT_MARGIN_M, min(here, goal_pose_margin))))
-            n = try_shot(clear, blocked, p, offx, offy, px, py, x, y, yaw, roll, p[P_GX], p[P_GY], p[P_GYAW], 0.0,
-                         seg_roll, seg_curv, seg_len, 2.0 * h_here + 1e-6 if allow_reverse else math.inf, keep)
-            if n > 0:
+            # 3d. A shot that is free but keeps less than ``keep`` is kept to fall back on (the first one): the search
+            #     goes on for P_FALL_WAIT expansions for a shot that keeps it and takes the fallback when it finds none
+            #     (1.), not the thousands of expansions that finding one can take in a tight map, often for a path that
+            #     then passes as close elsewhere (issue 21's ninth round: smoothers_world#7 of seed 0, 6 136 -> 468)
+            fall = keep > 0.0 and p[P_FALL_WAIT] > 0.0 and counters[C_FALL_SEGS] == 0
+            n, short = _shot_or_fallback(clear, blocked, p, offx, offy, px, py, x, y, yaw, roll, seg_roll, seg_curv,
+                                         seg_len, 2.0 * h_here + 1e-6 if allow_reverse else math.inf, keep,
+                                         SHOT_DUBINS, fall)
+            if short:
+                _keep_fallback(counters, p, k, seg_roll, seg_curv, seg_len, n)
+            elif n > 0:
                 counters[C_RESULT] = k
                 counters[C_SHOT_SEGS] = n
                 return FOUND
@@ -810,8 +876,14 @@ def search_chunk(
             keep = max(0.0, min(p[P_PREFERRED], here, goal_pose_margin))
             n = 0
             for kind in (SHOT_WEIGHTED, SHOT_SHORTEST, SHOT_SECOND, SHOT_THIRD):
-                n = try_shot(clear, blocked, p, offx, offy, px, py, sx, sy, syaw, sroll, p[P_GX], p[P_GY], p[P_GYAW],
-                             0.0, seg_roll, seg_curv, seg_len, MAX_SHOT_M, keep, kind)
+                fall = keep > 0.0 and p[P_FALL_WAIT] > 0.0 and counters[C_FALL_SEGS] == 0
+                n, short = _shot_or_fallback(clear, blocked, p, offx, offy, px, py, sx, sy, syaw, sroll, seg_roll,
+                                             seg_curv, seg_len, MAX_SHOT_M, keep, kind, fall)
+                if short:
+                    back, total = _backwards(node_f, node_i, src, step, seg_len, n)
+                    if back <= p[P_BACK_SHARE] * total:
+                        _keep_fallback(counters, p, src, seg_roll, seg_curv, seg_len, n)  # 3d
+                    n = 0
                 if n > 0:
                     break
             if n > 0:

@@ -261,6 +261,21 @@ def _direction_runs(motions: list[tuple[float, float, float]]) -> list[tuple[int
     return runs
 
 
+FALLBACK_WAIT = 400  # kernels 3d: expansions a shot that keeps less room than asked waits for one that keeps it
+
+
+def _take_kept(run: _Search) -> bool:
+    """Make the shot ``run`` holds back (kernels 3c), else the one it keeps to fall back on (3d), its result; False
+    when it has neither."""
+    if run.counters[kernels.C_HELD_SEGS] > 0:
+        kernels.take_held(run.counters, run.seg_roll, run.seg_curv, run.seg_len)
+        return True
+    if run.counters[kernels.C_FALL_SEGS] > 0:
+        kernels.take_fallback(run.counters, run.seg_roll, run.seg_curv, run.seg_len)
+        return True
+    return False
+
+
 class _Search:
     """The arrays of one search (open heap, nodes, closed set) and chunked calls of the compiled loop."""
 
@@ -291,8 +306,8 @@ class _Search:
         self.grow_s = 0.0  # how long the node storage's last growth took (s)
         self.counters = np.zeros(kernels.N_COUNTERS, dtype=np.int64)
         self.counters[kernels.C_TRIED] = -1
-        # the shot found (first half) and a shot held back (second half, kernels.search_chunk 3c)
-        self.seg_roll, self.seg_curv, self.seg_len = (np.zeros(2 * kernels.MAX_SHOT_SEGS) for _ in range(3))
+        # the shot found (first third), a shot held back (second, kernels.search_chunk 3c) and a fallback shot (3d)
+        self.seg_roll, self.seg_curv, self.seg_len = (np.zeros(3 * kernels.MAX_SHOT_SEGS) for _ in range(3))
         self.node_f[0] = (*start, 0.0, 0.0)
         self.node_i[0] = (-1, o.n_rolls // 2, 0)
         self.counters[kernels.C_NODES] = 1
@@ -525,6 +540,7 @@ class HybridAStar:
                 planning_time_s=time.perf_counter() - t0,
             )
         run = _Search(self, start, goal, heur, o, self.reverse)
+        run.p[kernels.P_FALL_WAIT] = FALLBACK_WAIT
         side = self._drive(run, start, goal, o, clock)
         goal_path = None if side is None else side.motions
         met = side is not None and side.met_segments > 0  # a shot joined the two searches' trees (meet.py)
@@ -545,6 +561,8 @@ class HybridAStar:
                                  "found_from": "both" if met else "start" if found is run else "goal"}
         if held is not None:
             extra["held_shot_taken"] = True
+        if found is run and run.counters[kernels.C_FELL_BACK]:
+            extra["fallback_shot_taken"] = True  # the path keeps less room than preferred where its last shot passes
         analytic = side.met_segments if met and side is not None else int(found.counters[kernels.C_SHOT_SEGS])
         expansions = run.expansions
         if side is not None:
@@ -625,8 +643,7 @@ class HybridAStar:
             try:
                 status = run.step(min(self.chunk_expansions(o), cap - run.expansions))
             except PlannerTimedOut:
-                if run.counters[kernels.C_HELD_SEGS] > 0:  # out of time with a shot held back: it is the path
-                    kernels.take_held(run.counters, run.seg_roll, run.seg_curv, run.seg_len)
+                if _take_kept(run):  # out of time with a shot held back or kept to fall back on: it is the path
                     return side
                 raise
             if status == kernels.FOUND:
@@ -659,9 +676,9 @@ class HybridAStar:
                         f"reached from only {back} states around it, none of them the start's (a dead end or a "
                         f"heading into an obstacle)", planning_time_s=time.perf_counter() - t0,
                         expansions=run.expansions)
-            if (run.expansions >= cap or clock.expired()) and run.counters[kernels.C_HELD_SEGS] > 0:
-                # out of time or expansions with a mostly-backwards shot held back: it is the path
-                kernels.take_held(run.counters, run.seg_roll, run.seg_curv, run.seg_len)
+            if (run.expansions >= cap or clock.expired()) and _take_kept(run):
+                # out of time or expansions with a mostly-backwards shot held back, or a shot kept to fall back on:
+                # it is the path
                 return side
             if run.expansions >= cap:
                 raise NoValidPathFound(f"no valid path within the iteration cap of {cap} expansions",
