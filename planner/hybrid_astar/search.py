@@ -238,8 +238,18 @@ def warm_up() -> float:
     grid = OccupancyGrid.from_occupied(occupied, 0.1, name="warm-up")
     robot = load_robot()
     for reverse in (False, True):
-        HybridAStar(grid, robot, PlannerOptions(allow_reverse=reverse)).plan(
-            (1.5, 1.5, 0.0), (6.5, 6.5, math.pi / 2))
+        planner = HybridAStar(grid, robot, PlannerOptions(allow_reverse=reverse))
+        planner.plan((1.5, 1.5, 0.0), (6.5, 6.5, math.pi / 2))
+    # a shot from Python, as the goal side's searches shoot (two_ended, meet), and a held or fallback shot taken from
+    # Python: the search's own calls do not compile these signatures for Python, and a plan that first needed one
+    # spent up to a second compiling it
+    run = _Search(planner, (1.5, 1.5, 0.0), (6.5, 6.5, 0.0), planner.holonomic((6.5, 6.5)), planner.options, True)
+    kernels.try_shot(planner.clearance.clearance, planner.clearance.blocked, run.p, planner.footprint.offsets_x,
+                     planner.footprint.offsets_y, planner._px, planner._py, 1.5, 1.5, 0.0, 0.0, 6.5, 6.5, 0.0, 0.0,
+                     run.seg_roll, run.seg_curv, run.seg_len, 10.0, 0.0, kernels.SHOT_WEIGHTED)
+    kernels.take_held(run.counters, run.seg_roll, run.seg_curv, run.seg_len)  # as _held_if_cheaper and _take_kept
+    kernels.take_fallback(run.counters, run.seg_roll, run.seg_curv, run.seg_len)
+    dubins_distance(1.5, 1.5, 0.0, 6.5, 6.5, 0.0, robot.min_turning_radius_m)  # the forward alternative's bound
     meet.warm_up()
     took = time.perf_counter() - t0
     log.info("compiled the search kernels in %.2f s (once per process)", took)
