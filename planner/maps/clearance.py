@@ -251,6 +251,12 @@ class ClearanceMap:
         self.origin_x = float(grid.origin[0])
         self.origin_y = float(grid.origin[1])
         self.resolution_m = float(grid.resolution_m)
+        self.revision = 0  # how many times ``blocked`` was rewritten in place (blocked_changed)
+
+    def blocked_changed(self) -> None:
+        """Say that ``blocked`` was rewritten in place (a live map's update, planner/live/refresh.py): what was
+        derived from it and cached by revision (the reachability labels) is computed again."""
+        self.revision += 1
 
     def disc_components(self, inradius_m: float) -> np.ndarray:
         """Labels (height, width; int32) of the 8-connected pieces of cells that may hold the centre of a free

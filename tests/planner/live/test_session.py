@@ -55,6 +55,29 @@ def test_refresh_equals_rebuild() -> None:
     assert p1.length_m == pytest.approx(p2.length_m)
 
 
+def test_a_refreshed_planner_admits_a_goal_the_updated_map_opens() -> None:
+    """The reachability labels (refusing a goal no motion reaches) are cached per map: a refresh says the blocked
+    cells changed. A wall seen across the corridor refuses the goal (the labels computed with it); seen gone again,
+    the goal is admitted and planned to, not refused by the labels of the walled map."""
+    from planner.errors import NoValidPathFound
+
+    live = LiveMap(corridor(), ObstacleLayerParams.for_robot(ROBOT))
+    opts = PlannerOptions(allow_unknown=True)
+    planner = capped(HybridAStar(live.grid, ROBOT, opts))
+    wall = live.apply(PointObservation(wall_points(9.0, 0.0, 10.0), np.array([4.0, 5.0, 0.3])))
+    planner, _, how = refresh(planner, list(wall.regions), max_share=1.0)
+    assert how == "patched"
+    with pytest.raises(NoValidPathFound) as err:
+        planner.plan(START, GOAL)
+    assert err.value.expansions == 0
+    # the wall is gone: rays through it to the far wall clear its cells
+    far = np.stack([np.full(200, 18.0), np.linspace(0.3, 9.7, 200), np.full(200, 0.3)], axis=1)
+    gone = live.apply(PointObservation(far, np.array([4.0, 5.0, 0.3])))
+    planner, _, how = refresh(planner, list(gone.regions), max_share=1.0)
+    assert how == "patched"
+    assert planner.plan(START, GOAL).length_m > 0
+
+
 def test_blocked_path_is_replanned_from_the_current_pose() -> None:
     live = LiveMap(corridor(), ObstacleLayerParams.for_robot(ROBOT))
     session = LiveSession(live, ROBOT, policy=ReplanPolicy(time_limit_s=5.0))
