@@ -374,30 +374,25 @@ def try_shot(
     the rolled end lands (< 0.1 mm). Returns the number of segments written, or 0 when no valid shot keeps a
     footprint margin of at least ``min_margin`` (0 = collision-free) and is shorter than ``max_len``.
     """
-    n = _shot_segments(p, x, y, yaw, roll, gx, gy, gyaw, groll, seg_roll, seg_curv, seg_len, max_len, math.inf,
-                       kind, np.zeros(RS_MAX_SEGS, dtype=np.int64), np.zeros(RS_MAX_SEGS))
-    if n <= 0:
-        return 0
-    if shot_margin(clear, blocked, p, offx, offy, px, py, x, y, yaw, roll, seg_roll, seg_curv, seg_len, n, groll,
-                   min_margin) < min_margin:
-        return 0
-    return n
+    return _shot_or_fallback(clear, blocked, p, offx, offy, px, py, x, y, yaw, roll, gx, gy, gyaw, groll, seg_roll,
+                             seg_curv, seg_len, max_len, min_margin, kind, False)[0]
 
 
 @njit(cache=True)
 def _shot_or_fallback(
     clear: np.ndarray, blocked: np.ndarray, p: np.ndarray, offx: np.ndarray, offy: np.ndarray, px: np.ndarray,
-    py: np.ndarray, x: float, y: float, yaw: float, roll: float, seg_roll: np.ndarray, seg_curv: np.ndarray,
-    seg_len: np.ndarray, max_len: float, keep: float, kind: int, fall: bool,
+    py: np.ndarray, x: float, y: float, yaw: float, roll: float, gx: float, gy: float, gyaw: float, groll: float,
+    seg_roll: np.ndarray, seg_curv: np.ndarray, seg_len: np.ndarray, max_len: float, keep: float, kind: int,
+    fall: bool,
 ) -> tuple[int, bool]:
-    """The search's shot to the goal (:func:`try_shot` with margin ``keep``): (segments, False) when it keeps the
-    margin; with ``fall``, (segments, True) when it is free but keeps less (a fallback, search_chunk 3d, in one sweep
-    that stops only at a collision); else (0, False)."""
-    n = _shot_segments(p, x, y, yaw, roll, p[P_GX], p[P_GY], p[P_GYAW], 0.0, seg_roll, seg_curv, seg_len, max_len,
-                       math.inf, kind, np.zeros(RS_MAX_SEGS, dtype=np.int64), np.zeros(RS_MAX_SEGS))
+    """:func:`try_shot` with margin ``keep``: (segments, False) when the shot keeps it; with ``fall``, (segments,
+    True) when it is free but keeps less (a fallback, search_chunk 3d, in one sweep that stops only at a collision);
+    else (0, False)."""
+    n = _shot_segments(p, x, y, yaw, roll, gx, gy, gyaw, groll, seg_roll, seg_curv, seg_len, max_len, math.inf,
+                       kind, np.zeros(RS_MAX_SEGS, dtype=np.int64), np.zeros(RS_MAX_SEGS))
     if n <= 0:
         return 0, False
-    worst = shot_margin(clear, blocked, p, offx, offy, px, py, x, y, yaw, roll, seg_roll, seg_curv, seg_len, n, 0.0,
+    worst = shot_margin(clear, blocked, p, offx, offy, px, py, x, y, yaw, roll, seg_roll, seg_curv, seg_len, n, groll,
                         0.0 if fall else keep)
     if worst >= keep:
         return n, False
@@ -699,15 +694,21 @@ def _shot_cost(p: np.ndarray, parent_dir: int, seg_len: np.ndarray, n: int) -> f
 
 
 @njit(cache=True)
+def _copy_shot(seg_roll: np.ndarray, seg_curv: np.ndarray, seg_len: np.ndarray, src: int, dst: int, n: int) -> None:
+    """Copy ``n`` shot segments from offset ``src`` to offset ``dst`` of the segment arrays (the shot found at 0,
+    the held-back one at MAX_SHOT_SEGS, the fallback at 2·MAX_SHOT_SEGS)."""
+    for m in range(n):
+        seg_roll[dst + m] = seg_roll[src + m]
+        seg_curv[dst + m] = seg_curv[src + m]
+        seg_len[dst + m] = seg_len[src + m]
+
+
+@njit(cache=True)
 def take_fallback(counters: np.ndarray, seg_roll: np.ndarray, seg_curv: np.ndarray, seg_len: np.ndarray) -> None:
     """Make the fallback shot (3d) the result."""
-    n = counters[C_FALL_SEGS]
-    for m in range(n):
-        seg_roll[m] = seg_roll[2 * MAX_SHOT_SEGS + m]
-        seg_curv[m] = seg_curv[2 * MAX_SHOT_SEGS + m]
-        seg_len[m] = seg_len[2 * MAX_SHOT_SEGS + m]
+    _copy_shot(seg_roll, seg_curv, seg_len, 2 * MAX_SHOT_SEGS, 0, counters[C_FALL_SEGS])
     counters[C_RESULT] = counters[C_FALL_NODE]
-    counters[C_SHOT_SEGS] = n
+    counters[C_SHOT_SEGS] = counters[C_FALL_SEGS]
     counters[C_FALL_SEGS] = 0
     counters[C_FELL_BACK] = 1
 
@@ -715,28 +716,19 @@ def take_fallback(counters: np.ndarray, seg_roll: np.ndarray, seg_curv: np.ndarr
 @njit(cache=True)
 def _keep_fallback(counters: np.ndarray, p: np.ndarray, k: int, seg_roll: np.ndarray, seg_curv: np.ndarray,
                    seg_len: np.ndarray, n: int) -> None:
-    """Keep the ``n`` shot segments from node ``k`` as the fallback (3d), the first one found."""
-    if counters[C_FALL_SEGS] > 0:
-        return
+    """Keep the ``n`` shot segments from node ``k`` as the fallback (3d), waiting P_FALL_WAIT expansions."""
     counters[C_FALL_NODE] = k
     counters[C_FALL_SEGS] = n
     counters[C_FALL_UNTIL] = counters[C_EXPANSIONS] + int(p[P_FALL_WAIT])
-    for m in range(n):
-        seg_roll[2 * MAX_SHOT_SEGS + m] = seg_roll[m]
-        seg_curv[2 * MAX_SHOT_SEGS + m] = seg_curv[m]
-        seg_len[2 * MAX_SHOT_SEGS + m] = seg_len[m]
+    _copy_shot(seg_roll, seg_curv, seg_len, 0, 2 * MAX_SHOT_SEGS, n)
 
 
 @njit(cache=True)
 def take_held(counters: np.ndarray, seg_roll: np.ndarray, seg_curv: np.ndarray, seg_len: np.ndarray) -> None:
     """Make the held-back shot (3c) the result."""
-    n = counters[C_HELD_SEGS]
-    for m in range(n):
-        seg_roll[m] = seg_roll[MAX_SHOT_SEGS + m]
-        seg_curv[m] = seg_curv[MAX_SHOT_SEGS + m]
-        seg_len[m] = seg_len[MAX_SHOT_SEGS + m]
+    _copy_shot(seg_roll, seg_curv, seg_len, MAX_SHOT_SEGS, 0, counters[C_HELD_SEGS])
     counters[C_RESULT] = counters[C_HELD_NODE]
-    counters[C_SHOT_SEGS] = n
+    counters[C_SHOT_SEGS] = counters[C_HELD_SEGS]
     counters[C_HELD_SEGS] = 0
     counters[C_FELL_BACK] = 0
 
@@ -847,9 +839,9 @@ def search_chunk(
             #     (1.), not the thousands of expansions that finding one can take in a tight map, often for a path that
             #     then passes as close elsewhere (issue 21's ninth round: smoothers_world#7 of seed 0, 6 136 -> 468)
             fall = keep > 0.0 and p[P_FALL_WAIT] > 0.0 and counters[C_FALL_SEGS] == 0
-            n, short = _shot_or_fallback(clear, blocked, p, offx, offy, px, py, x, y, yaw, roll, seg_roll, seg_curv,
-                                         seg_len, 2.0 * h_here + 1e-6 if allow_reverse else math.inf, keep,
-                                         SHOT_DUBINS, fall)
+            n, short = _shot_or_fallback(clear, blocked, p, offx, offy, px, py, x, y, yaw, roll, p[P_GX], p[P_GY],
+                                         p[P_GYAW], 0.0, seg_roll, seg_curv, seg_len,
+                                         2.0 * h_here + 1e-6 if allow_reverse else math.inf, keep, SHOT_DUBINS, fall)
             if short:
                 _keep_fallback(counters, p, k, seg_roll, seg_curv, seg_len, n)
             elif n > 0:
@@ -877,8 +869,9 @@ def search_chunk(
             n = 0
             for kind in (SHOT_WEIGHTED, SHOT_SHORTEST, SHOT_SECOND, SHOT_THIRD):
                 fall = keep > 0.0 and p[P_FALL_WAIT] > 0.0 and counters[C_FALL_SEGS] == 0
-                n, short = _shot_or_fallback(clear, blocked, p, offx, offy, px, py, sx, sy, syaw, sroll, seg_roll,
-                                             seg_curv, seg_len, MAX_SHOT_M, keep, kind, fall)
+                n, short = _shot_or_fallback(clear, blocked, p, offx, offy, px, py, sx, sy, syaw, sroll, p[P_GX],
+                                             p[P_GY], p[P_GYAW], 0.0, seg_roll, seg_curv, seg_len, MAX_SHOT_M, keep,
+                                             kind, fall)
                 if short:
                     back, total = _backwards(node_f, node_i, src, step, seg_len, n)
                     if back <= p[P_BACK_SHARE] * total:
@@ -901,10 +894,7 @@ def search_chunk(
                     p[P_HELD_COST] = cost
                     counters[C_HELD_NODE] = src
                     counters[C_HELD_SEGS] = n
-                    for m in range(n):
-                        seg_roll[MAX_SHOT_SEGS + m] = seg_roll[m]
-                        seg_curv[MAX_SHOT_SEGS + m] = seg_curv[m]
-                        seg_len[MAX_SHOT_SEGS + m] = seg_len[m]
+                    _copy_shot(seg_roll, seg_curv, seg_len, 0, MAX_SHOT_SEGS, n)
                     if counters[C_HELD_UNTIL] == 0:
                         counters[C_HELD_UNTIL] = counters[C_EXPANSIONS] + HOLD_EXPANSIONS
         # 4. Expand: every held roll, forward (and reverse), one exact step of eq. 1.

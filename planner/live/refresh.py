@@ -124,9 +124,8 @@ def _patch(planner: HybridAStar, outer: CellRect, members: list[CellRect], n_rea
     if not allow_unknown:
         blocked_outer |= grid.data[sl] < 0
     for rect in members:
-        cm.blocked[rect.slices()] = blocked_outer[rect.iy0 - outer.iy0:rect.iy1 - outer.iy0,
-                                                  rect.ix0 - outer.ix0:rect.ix1 - outer.ix0]
-    cm.blocked_changed()
+        cm.write_blocked(rect.slices(), blocked_outer[rect.iy0 - outer.iy0:rect.iy1 - outer.iy0,
+                                                      rect.ix0 - outer.ix0:rect.ix1 - outer.ix0])
     # the ring outside the map counts as blocked (ClearanceMap's convention); other window edges do not
     pad = ((1 if outer.iy0 == 0 else 0, 1 if outer.iy1 == h else 0),
            (1 if outer.ix0 == 0 else 0, 1 if outer.ix1 == w else 0))

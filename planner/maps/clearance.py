@@ -251,11 +251,13 @@ class ClearanceMap:
         self.origin_x = float(grid.origin[0])
         self.origin_y = float(grid.origin[1])
         self.resolution_m = float(grid.resolution_m)
-        self.revision = 0  # how many times ``blocked`` was rewritten in place (blocked_changed)
+        self.revision = 0  # how many times ``blocked`` was rewritten in place (write_blocked)
 
-    def blocked_changed(self) -> None:
-        """Say that ``blocked`` was rewritten in place (a live map's update, planner/live/refresh.py): what was
-        derived from it and cached by revision (the reachability labels) is computed again."""
+    def write_blocked(self, where: tuple[slice, slice], values: np.ndarray) -> None:
+        """Rewrite blocked cells in place (a live map's update, planner/live/refresh.py) and count the revision:
+        what was derived from them and cached by revision (the reachability labels) is computed again. The
+        clearance itself is its writer's to update."""
+        self.blocked[where] = values
         self.revision += 1
 
     def disc_components(self, inradius_m: float) -> np.ndarray:

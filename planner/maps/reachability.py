@@ -12,7 +12,7 @@ a cell) of the goal is in the start's 8-connected piece, no path exists: the pla
 
 The labels are computed once per clearance map and inradius (``scipy.ndimage.label``, ≈ 50 ms on a
 4-million-cell map) and kept while the map's blocked cells stay the same: they are cached by the clearance map's
-``revision``, which the live map's in-place update bumps (:meth:`ClearanceMap.blocked_changed`), so an updated
+``revision``, which the live map's in-place update counts (:meth:`ClearanceMap.write_blocked`), so an updated
 map is relabelled, never trusted stale. (Until issue 21's ninth round each query compared a CRC of the blocked
 cells instead: 0.9 ms a plan on a 4-million-cell map, a tenth of an easy plan there.)
 The check never refuses a goal the search could reach (tested against the search on the shipped problems

@@ -73,14 +73,12 @@ def test_labels_follow_a_map_changed_in_place() -> None:
     assert not goal_reachable(cm, poly, start, goal, 0.1)
     before = components(cm, 0.32)
     assert components(cm, 0.32) is before  # unchanged: the labels are not computed again
-    cm.blocked[40:80, 118:122] = False  # a 2 m opening
+    cm.write_blocked((slice(40, 80), slice(118, 122)), np.zeros((40, 4), bool))  # a 2 m opening, as refresh writes
     cm.clearance[...] = clearance_cells(cm.blocked, 0.05)
-    cm.blocked_changed()  # as planner/live/refresh.py says it
     assert goal_reachable(cm, poly, start, goal, 0.1)
     assert components(cm, 0.32) is not before
-    cm.blocked[40:80, 118:122] = True
+    cm.write_blocked((slice(40, 80), slice(118, 122)), np.ones((40, 4), bool))
     cm.clearance[...] = clearance_cells(cm.blocked, 0.05)
-    cm.blocked_changed()
     assert not goal_reachable(cm, poly, start, goal, 0.1)
 
 
