@@ -33,15 +33,17 @@ C_NODES, C_EXPANSIONS, C_SINCE_SHOT, C_RESULT, C_SHOT_SEGS, C_BEST, C_TRIED = 0,
 C_HELD_NODE, C_HELD_SEGS, C_HELD_UNTIL = 7, 8, 9  # a mostly-backwards shot held back (see search_chunk, 3c)
 C_FALL_NODE, C_FALL_SEGS, C_FALL_UNTIL = 10, 11, 12  # a shot that keeps less room than asked, kept to fall back on (3d)
 C_FELL_BACK = 13  # 1 when the result is that shot
-N_COUNTERS = 14
+C_FALL_BACKWARDS = 14  # 1 when the shot kept to fall back on makes the path roll mostly backwards
+N_COUNTERS = 15
 # params[] slots (float64)
 (P_OX, P_OY, P_RES, P_RC, P_HOX, P_HOY, P_HCELL, P_RHO, P_GX, P_GY, P_GYAW, P_TOL_XY, P_TOL_YAW, P_RADIUS,
  P_STEP, P_SPACING, P_NON_STRAIGHT, P_CHANGE, P_REVERSE, P_SWITCH, P_COST_PENALTY, P_PROX_RANGE, P_GREED,
  P_SHOT_RATIO, P_MAX_ROLL, P_USE_DUBINS, P_ALLOW_REVERSE, P_N_YAW, P_USE_RS, P_RS_CELL, P_RS_HALF,
  P_PREFERRED, P_REACH, P_BEST_H, P_REJECT, P_CLOSER_H, P_HELD_COST, P_BACK_SHARE, P_BOUND, P_LONG,
- P_GCOS, P_GSIN, P_FALL_WAIT) = range(43)  # P_GCOS, P_GSIN: cos and sin of P_GYAW (for the Reeds–Shepp table's frame)
-# P_FALL_WAIT: expansions a fallback shot (3d) waits for one that keeps the room asked; 0 = no fallback shots
-N_PARAMS = 43
+ P_GCOS, P_GSIN, P_FALL_WAIT, P_BACK_WAIT) = range(44)  # P_GCOS, P_GSIN: cos and sin of P_GYAW (for the Reeds–Shepp
+# table's frame); P_FALL_WAIT: expansions a fallback shot (3d) waits for one that keeps the room asked, 0 = no fallback
+# shots; P_BACK_WAIT: a fallback shot that rolls the path mostly backwards waits this × P_FALL_WAIT, 0 = none is kept
+N_PARAMS = 44
 BEST_SHOT_EVERY = 256  # reversing: every this many expansions, a Reeds–Shepp shot from the closest node if new
 NEAR_TIE = 1.05  # the second / third cheapest Reeds–Shepp word is shot only within this ratio of the cheapest
 MAX_SHOT_SEGS = 6  # a Dubins shot has 3 segments, a Reeds–Shepp shot up to 5
@@ -715,11 +717,13 @@ def take_fallback(counters: np.ndarray, seg_roll: np.ndarray, seg_curv: np.ndarr
 
 @njit(cache=True)
 def _keep_fallback(counters: np.ndarray, p: np.ndarray, k: int, seg_roll: np.ndarray, seg_curv: np.ndarray,
-                   seg_len: np.ndarray, n: int) -> None:
-    """Keep the ``n`` shot segments from node ``k`` as the fallback (3d), waiting P_FALL_WAIT expansions."""
+                   seg_len: np.ndarray, n: int, backwards: bool = False) -> None:
+    """Keep the ``n`` shot segments from node ``k`` as the fallback (3d), waiting P_FALL_WAIT expansions, or
+    P_BACK_WAIT × that many when the shot makes the path roll mostly ``backwards``."""
     counters[C_FALL_NODE] = k
     counters[C_FALL_SEGS] = n
-    counters[C_FALL_UNTIL] = counters[C_EXPANSIONS] + int(p[P_FALL_WAIT])
+    counters[C_FALL_BACKWARDS] = 1 if backwards else 0
+    counters[C_FALL_UNTIL] = counters[C_EXPANSIONS] + int((p[P_BACK_WAIT] if backwards else 1.0) * p[P_FALL_WAIT])
     _copy_shot(seg_roll, seg_curv, seg_len, 0, 2 * MAX_SHOT_SEGS, n)
 
 
@@ -837,8 +841,11 @@ def search_chunk(
             # 3d. A shot that is free but keeps less than ``keep`` is kept to fall back on (the first one): the search
             #     goes on for P_FALL_WAIT expansions for a shot that keeps it and takes the fallback when it finds none
             #     (1.), not the thousands of expansions that finding one can take in a tight map, often for a path that
-            #     then passes as close elsewhere (issue 21's ninth round: smoothers_world#7 of seed 0, 6 136 -> 468)
-            fall = keep > 0.0 and p[P_FALL_WAIT] > 0.0 and counters[C_FALL_SEGS] == 0
+            #     then passes as close elsewhere (issue 21's ninth round: smoothers_world#7 of seed 0, 6 136 -> 468).
+            #     A Reeds–Shepp fallback that makes the path roll mostly backwards (3b) waits P_BACK_WAIT × as long,
+            #     gives way to any other fallback and to a held shot (3c, which keeps the room), and is not kept while
+            #     a shot is held (tenth round: pockets#5 of seed 1, 3 901 -> 1 702 expansions, 9.71 -> 8.63 m)
+            fall = keep > 0.0 and p[P_FALL_WAIT] > 0.0 and (counters[C_FALL_SEGS] == 0 or counters[C_FALL_BACKWARDS])
             n, short = _shot_or_fallback(clear, blocked, p, offx, offy, px, py, x, y, yaw, roll, p[P_GX], p[P_GY],
                                          p[P_GYAW], 0.0, seg_roll, seg_curv, seg_len,
                                          2.0 * h_here + 1e-6 if allow_reverse else math.inf, keep, SHOT_DUBINS, fall)
@@ -868,7 +875,8 @@ def search_chunk(
             keep = max(0.0, min(p[P_PREFERRED], here, goal_pose_margin))
             n = 0
             for kind in (SHOT_WEIGHTED, SHOT_SHORTEST, SHOT_SECOND, SHOT_THIRD):
-                fall = keep > 0.0 and p[P_FALL_WAIT] > 0.0 and counters[C_FALL_SEGS] == 0
+                fall = keep > 0.0 and p[P_FALL_WAIT] > 0.0 and (counters[C_FALL_SEGS] == 0
+                                                                 or counters[C_FALL_BACKWARDS])
                 n, short = _shot_or_fallback(clear, blocked, p, offx, offy, px, py, sx, sy, syaw, sroll, p[P_GX],
                                              p[P_GY], p[P_GYAW], 0.0, seg_roll, seg_curv, seg_len, MAX_SHOT_M, keep,
                                              kind, fall)
@@ -876,6 +884,8 @@ def search_chunk(
                     back, total = _backwards(node_f, node_i, src, step, seg_len, n)
                     if back <= p[P_BACK_SHARE] * total:
                         _keep_fallback(counters, p, src, seg_roll, seg_curv, seg_len, n)  # 3d
+                    elif p[P_BACK_WAIT] > 0.0 and counters[C_FALL_SEGS] == 0 and counters[C_HELD_SEGS] == 0:
+                        _keep_fallback(counters, p, src, seg_roll, seg_curv, seg_len, n, True)
                     n = 0
                 if n > 0:
                     break
@@ -891,6 +901,9 @@ def search_chunk(
                 #     keeps the held shot instead if that costs less: search.py, HybridAStar._plan.)
                 cost = node_f[src, 4] + _shot_cost(p, node_i[src, 2], seg_len, n)
                 if cost < p[P_HELD_COST]:
+                    if counters[C_FALL_BACKWARDS]:  # a held shot keeps the room a mostly-backwards fallback does not
+                        counters[C_FALL_SEGS] = 0
+                        counters[C_FALL_BACKWARDS] = 0
                     p[P_HELD_COST] = cost
                     counters[C_HELD_NODE] = src
                     counters[C_HELD_SEGS] = n

@@ -83,11 +83,12 @@ GOAL_CHECK_AFTER = 20_000  # expansions without a path before the goal's surroun
 GOAL_CHECK_BUDGET = 40_000  # expansions that search may take
 GOAL_CHECK_SHARE = 0.15  # ... and at most this share of the time limit
 GOAL_SIDE_AFTER = 500  # expansions without a path before the goal side's search joins in (two_ended.py)
-MEET_AFTER = 10_000  # expansions of both sides before shots try to join their trees (meet.py): tails only
+MEET_AFTER = 2_000  # expansions of both sides before shots try to join their trees (meet.py)
 FORWARD_RETRY_PER_M = 250  # expansions a forward-only search may take to find a cheaper path, per metre start–goal,
 FORWARD_RETRY_MIN = 1_000  # ... at least this many
 FORWARD_RETRY_MAX = 20_000  # ... and at most this many (docs/planning.md: the budgets the accepted paths needed)
 FORWARD_RETRY_SHARE = 0.5  # ... tried when the path found rolls more than this share of its length backwards
+FORWARD_RETRY_TIMES = 3  # ... and at most this many × the plan's expansions before it
 FORWARD_CHECK_BUDGET = 600  # ... unless a forward-only search from the goal exhausts within this many (a dead end)
 _LOOP = threading.local()  # the current thread's plan: its clock, its seconds in the compiled loop (search_loop_time_s)
 GROWTH_MARGIN = 2.5  # a search's storage grows only when this × its last growth's time still fits before the deadline
@@ -271,6 +272,19 @@ def _direction_runs(motions: list[tuple[float, float, float]]) -> list[tuple[int
     return runs
 
 
+def _cusps(motions: list[tuple[float, float, float]]) -> int:
+    """Changes of travel direction along the motions."""
+    n = 0
+    last = 0
+    for _, _, s in motions:
+        d = 1 if s > 0 else -1 if s < 0 else 0
+        if d and last and d != last:
+            n += 1
+        last = d or last
+    return n
+
+
+BACK_FALLBACK_WAIT = 1.5
 FALLBACK_WAIT = 400  # kernels 3d: expansions a shot that keeps less room than asked waits for one that keeps it
 
 
@@ -551,6 +565,7 @@ class HybridAStar:
             )
         run = _Search(self, start, goal, heur, o, self.reverse)
         run.p[kernels.P_FALL_WAIT] = FALLBACK_WAIT
+        run.p[kernels.P_BACK_WAIT] = BACK_FALLBACK_WAIT
         side = self._drive(run, start, goal, o, clock)
         goal_path = None if side is None else side.motions
         met = side is not None and side.met_segments > 0  # a shot joined the two searches' trees (meet.py)
@@ -586,7 +601,7 @@ class HybridAStar:
             # (not when the search found a path that turns round and it cost more than the shot that rolls backwards)
             checked: list[int] = []
             fwd, forward = self._forward_alternative(start, goal, heur, o, clock, motions, bound,
-                                                     checked)
+                                                     checked, expansions)
             if checked:
                 expansions += checked[0]
                 extra["forward_check_expansions"] = checked[0]
@@ -759,7 +774,7 @@ class HybridAStar:
     def _forward_alternative(
         self, start: Pose, goal: Pose, heur: HolonomicHeuristic, o: PlannerOptions, clock: Clock,
         motions: list[tuple[float, float, float]], bound: float = math.inf,
-        checked: list[int] | None = None,
+        checked: list[int] | None = None, spent: int = 0,
     ) -> tuple[_Search | None, list[tuple[float, float, float]] | None]:
         """The forward-only search run (None when not tried) and its path when it costs less than ``motions``
         by :meth:`_travel_cost` (else None).
@@ -769,11 +784,11 @@ class HybridAStar:
         backwards although turning round costs less. When the path it found rolls most of its length backwards
         (more than FORWARD_RETRY_SHARE; backing out of a dead end is fine) and a forward path could be cheaper
         (the Dubins distance is below its cost), a forward-only search (whose Dubins heuristic does
-        see the turn) gets FORWARD_RETRY_PER_M expansions per metre from start to goal (between FORWARD_RETRY_MIN
-        and FORWARD_RETRY_MAX, :meth:`forward_budget`) and what is left of the time limit; the cheaper of the two
-        paths is returned. It is not run when a forward-only search of the reverse problem from the goal
-        exhausts within FORWARD_CHECK_BUDGET expansions (no forward path reaches the goal); that check's
-        expansions are appended to ``checked``.
+        see the turn) gets FORWARD_RETRY_PER_M expansions per metre from start to goal, at most
+        FORWARD_RETRY_TIMES × the plan's ``spent`` expansions (:meth:`forward_budget`) and what is left of the time
+        limit; the cheaper of the two paths is returned. It is not run when a forward-only search of the reverse
+        problem from the goal exhausts within FORWARD_CHECK_BUDGET expansions (no forward path reaches the goal);
+        that check's expansions are appended to ``checked``.
         """
         if not self._mostly_backwards(start, motions):
             return None, None
@@ -786,7 +801,7 @@ class HybridAStar:
         run = _Search(self, start, goal, heur, o, False)
         run.p[kernels.P_BOUND] = bound
         try:
-            self._drive(run, start, goal, o, clock, fail_fast=False, cap=self.forward_budget(start, goal))
+            self._drive(run, start, goal, o, clock, fail_fast=False, cap=self.forward_budget(start, goal, spent))
         except PlannerCancelled:
             raise
         except PlanningError:
@@ -795,16 +810,23 @@ class HybridAStar:
         return run, (forward if self._travel_cost(start, forward, o) < cost else None)
 
     @staticmethod
-    def forward_budget(start: Pose, goal: Pose) -> int:
+    def forward_budget(start: Pose, goal: Pose, spent: int = 0) -> int:
         """Expansions the forward-only alternative search may take: FORWARD_RETRY_PER_M per metre of the straight
-        start–goal distance, clamped to [FORWARD_RETRY_MIN, FORWARD_RETRY_MAX].
+        start–goal distance, at most FORWARD_RETRY_TIMES × ``spent`` (the expansions the plan made before it, when
+        given) and FORWARD_RETRY_MAX, at least FORWARD_RETRY_MIN.
 
         Measured on 480 real-map problems (seeds 0–7 of the real bench): the 17 forward paths accepted took 7–371
         expansions per metre (one above 240), on the open 4-million-cell field mostly; in the bays, pockets and
         smoothers' rooms the searches that found nothing cheaper all ran into the old flat 20 000 (150–250 ms each).
+        Issue 21's tenth round: on seeds 0–3 the forward paths accepted took 0.2–1.8 × the plan's expansions before
+        them, while the searches that found nothing cheaper ran up to 17 810 expansions after a search of 1 800 (a
+        forward search stuck before a gap the holonomic heuristic passes and the footprint does not).
         """
         d = math.hypot(goal[0] - start[0], goal[1] - start[1])
-        return int(min(FORWARD_RETRY_MAX, max(FORWARD_RETRY_MIN, FORWARD_RETRY_PER_M * d)))
+        cap = min(float(FORWARD_RETRY_MAX), FORWARD_RETRY_PER_M * d)
+        if spent:
+            cap = min(cap, FORWARD_RETRY_TIMES * spent)
+        return int(max(FORWARD_RETRY_MIN, cap))
 
     def _search_cost(self, run: _Search) -> float:
         """A lower bound of the search's own cost (g) of the path ``run`` found: the result node's g and the
@@ -862,8 +884,10 @@ class HybridAStar:
         self, start: Pose, motions: list[tuple[float, float, float]], p: np.ndarray, max_tries: int,
         recheck: int = 1, counts: np.ndarray | None = None,
     ) -> list[tuple[float, float, float]]:
-        """Shortcut the path with forward shots (which may also replace a manoeuvre with cusps), then each
-        stretch travelled backwards with reverse shots; the cusps left stay where they are.
+        """Shortcut the path with forward shots (which may also replace a manoeuvre with cusps), then, when it
+        still has cusps and rolls backwards somewhere, with reverse shots across it all
+        (:meth:`_reverse_across_cusps`), then each stretch travelled backwards with reverse shots; the cusps left
+        stay where they are.
 
         A reverse stretch is shortcut as the forward one it mirrors: with the heading turned by π the
         sphere rolls it forwards with every roll and curvature negated (eq. 1 is unchanged under
@@ -872,6 +896,8 @@ class HybridAStar:
         """
         counts = np.zeros(4, dtype=np.int64) if counts is None else counts
         motions = self._shortcut_run(start, 0.0, motions, p, max_tries, False, recheck, counts)
+        if _cusps(motions) and any(s < 0 for _, _, s in motions):
+            motions = self._reverse_across_cusps(start, motions, p, max_tries, recheck, counts)
         out: list[tuple[float, float, float]] = []
         x, y, yaw = start
         roll = 0.0
@@ -885,6 +911,18 @@ class HybridAStar:
             end = self._knots((x, y, yaw), run, roll)[-1]
             x, y, yaw, roll = float(end[0]), float(end[1]), float(end[2]), float(end[3])
         return out
+
+    def _reverse_across_cusps(
+        self, start: Pose, motions: list[tuple[float, float, float]], p: np.ndarray, max_tries: int, recheck: int,
+        counts: np.ndarray,
+    ) -> list[tuple[float, float, float]]:
+        """Shortcut the whole path with reverse shots, the path mirrored as in :meth:`_shortcut`: a shorter reverse
+        shot may replace a manoeuvre (cusps and the forward bits between them) in a path that rolls backwards, which
+        the shortcuts within each stretch of one direction leave in place."""
+        mirrored = [(-h, -c, -s) for h, c, s in motions]
+        done = self._shortcut_run((start[0], start[1], start[2] + math.pi), 0.0, mirrored, p, max_tries, True,
+                                  recheck, counts)
+        return [(-h + 0.0, -c + 0.0, -s + 0.0) for h, c, s in done]
 
     def _footprint_arrays(self, flip: bool = False) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """Covering-circle offsets (x, y) and polygon (x, y) in the robot frame; ``flip`` turns them by π, for

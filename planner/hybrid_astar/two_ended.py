@@ -44,6 +44,7 @@ Motion = tuple[float, float, float]
 
 TURN_BUDGET = 1_000  # expansions of one search for a turn between the trees (meet.find_turn)
 TURN_TRIES = 12  # ... and at most this many such searches per plan
+TURN_AFTER = 6_000  # expansions of both sides before the first look for a place to turn between the trees
 TURN_LOOK_EVERY = 4_000  # expansions of both sides between two looks for such a place that found none
 GAP_NODES = 12  # nodes back along a tolerance-hit path from which a shot to the exact start is tried
 
@@ -104,7 +105,7 @@ class GoalSide:
         self.turns = 0
         self.turn_expansions = 0
         self._turn_tried: np.ndarray | None = None
-        self._turn_look_at = 0  # both sides' expansions before which no place for a turn is looked for again
+        self._turn_look_at = TURN_AFTER  # both sides' expansions before which no place for a turn is looked for again
 
     @property
     def expansions(self) -> int:

@@ -2,6 +2,7 @@
 of nearly the same pose (the goal side's heading turned by π, upright only), and a problem with a manoeuvre at both
 ends that the two-ended search alone needs 220 k expansions for is joined within a few tens of thousands."""
 
+import itertools
 import math
 
 import numpy as np
@@ -83,6 +84,20 @@ def test_a_manoeuvre_at_both_ends_is_joined_in_the_middle(monkeypatch):
         HybridAStar(grid, ROBOT, options).plan(start, goal, cap)
 
 
+def test_a_manoeuvre_into_the_goal_is_joined_early():
+    """pockets#2 of the real-map bench (seed 0): 13 m along a 1.8 m corridor, then into the goal across another, and
+    a turn at the start. The forward tree gets near the goal in a few hundred expansions and then fills the corridor
+    there trying to turn into it, while the goal side's tree, grown from the goal, covers the corridor too: a shot
+    joins them once both have made search.MEET_AFTER (2 000) expansions. With the join after 10 000 (until issue
+    21's tenth round) the goal side found the path alone, after 8 852 expansions (21.87 m)."""
+    grid = load_map("maps/real/pockets.yaml")
+    start, goal = (6.125, 10.075, 2.9092350581717223), (19.325, 14.725, 2.599295721958983)
+    joined = HybridAStar(grid, ROBOT).plan(start, goal)
+    assert joined.extra["found_from"] == "both" and joined.expansions < 4_000
+    assert check_path(grid, ROBOT, joined.states, start, goal) == []
+    assert joined.length_m < 22.0  # 20.89 m
+
+
 def test_a_problem_solved_before_the_join_starts_is_unchanged(monkeypatch):
     # bays#9 of the real-map bench (seed 0): the goal side finds it in a few thousand expansions
     grid = load_map("maps/real/bays.yaml")
@@ -155,17 +170,28 @@ def test_a_look_for_a_turn_that_finds_no_place_is_not_repeated_every_round(monke
     finds no cell with opposite headings, the next waits TURN_LOOK_EVERY expansions of both sides."""
     grid, start, goal = _turn_round_in_a_corridor()
     looks = []
+    totals = []
+    real_turn = two_ended.GoalSide._turn
+
+    def turn(self, forward, clock):
+        totals.append(forward.expansions + self.run.expansions)
+        return real_turn(self, forward, clock)
 
     def nowhere(*args):
-        looks.append(1)
+        looks.append(totals[-1])
         return -1, -1, -1
 
+    monkeypatch.setattr(two_ended.GoalSide, "_turn", turn)
     monkeypatch.setattr(two_ended, "find_turn", nowhere)
     cap = Termination(time_limit_s=120.0, max_iterations=30_000)
     with pytest.raises(NoValidPathFound):
         HybridAStar(grid, ROBOT).plan(start, goal, cap)
-    # the two sides make up to 2 × 30 000 expansions, the first look after search.MEET_AFTER
-    assert 1 <= len(looks) <= (2 * 30_000 - search.MEET_AFTER) // two_ended.TURN_LOOK_EVERY + 1
+    # shots join the trees from search.MEET_AFTER on, but the first look for a turn waits for TURN_AFTER (a turn
+    # search costs up to TURN_BUDGET expansions: sooner, they cost more than they saved on the real-map problems)
+    assert min(totals) < two_ended.TURN_AFTER <= min(looks)
+    # the two sides make up to 2 × 30 000 expansions
+    assert 1 <= len(looks) <= (2 * 30_000 - two_ended.TURN_AFTER) // two_ended.TURN_LOOK_EVERY + 1
+    assert all(b - a >= two_ended.TURN_LOOK_EVERY for a, b in itertools.pairwise(looks))
 
 
 def test_a_turn_search_stops_with_the_plan(monkeypatch):
