@@ -538,6 +538,10 @@ def test_every_verb_ends_with_a_summary_line(capsys: pytest.CaptureFixture[str],
     ("depot", (11.425, 7.125, -0.14404827093188777), (4.425, 11.725, -1.7435407827295963), "held_shot_taken"),
     # issue 21's fallback shot (kernels 3d), taken when no shot keeps the preferred clearance (bays#5 of seed 0)
     ("bays", (19.625, 7.925, -2.7225669703686637), (8.525, 10.175, -0.4379459833171597), "fallback_shot_taken"),
+    # the tenth round's fallback that rolls mostly backwards (pockets#5 of the seed-1 draw) ...
+    ("pockets", (12.175, 10.225, 2.808622591618727), (19.175, 9.375, 0.5338586836303003), "fallback_shot_taken"),
+    # ... and its join of the two trees from 2 000 expansions (pockets#2 of seed 0: found from both sides)
+    ("pockets", (6.125, 10.075, 2.9092350581717223), (19.325, 14.725, 2.599295721958983), "goal_side_expansions"),
 ])
 def test_a_real_map_plan_is_the_same_at_every_door(client: httpx.Client, server: Server,
                                                      capsys: pytest.CaptureFixture[str], name: str,
