@@ -760,16 +760,8 @@ class HybridAStar:
     def _travel_cost(self, start: Pose, motions: list[tuple[float, float, float]], o: PlannerOptions) -> float:
         """The path's length with the search's direction terms: reverse metres × ``reverse_penalty`` and
         ``switch_cost_m`` per cusp (the terms by which the search prefers rolling forwards)."""
-        cost = self._length(start, motions)
-        last = 0
-        for _, _, s in motions:
-            if s < 0:
-                cost += (o.reverse_penalty - 1.0) * -s
-            d = 1 if s > 0 else -1 if s < 0 else 0
-            if d and last and d != last:
-                cost += o.switch_cost_m
-            last = d or last
-        return cost
+        backwards = sum(-s for _, _, s in motions if s < 0)
+        return self._length(start, motions) + (o.reverse_penalty - 1.0) * backwards + o.switch_cost_m * _cusps(motions)
 
     def _forward_alternative(
         self, start: Pose, goal: Pose, heur: HolonomicHeuristic, o: PlannerOptions, clock: Clock,
