@@ -716,6 +716,13 @@ def take_fallback(counters: np.ndarray, seg_roll: np.ndarray, seg_curv: np.ndarr
 
 
 @njit(cache=True)
+def _may_fall(counters: np.ndarray, p: np.ndarray, keep: float) -> bool:
+    """A shot asked to keep ``keep`` may become the fallback (3d) when it keeps less: fallbacks are on, and none is
+    kept yet or the one kept rolls the path mostly backwards (any other replaces it)."""
+    return keep > 0.0 and p[P_FALL_WAIT] > 0.0 and (counters[C_FALL_SEGS] == 0 or counters[C_FALL_BACKWARDS] == 1)
+
+
+@njit(cache=True)
 def _keep_fallback(counters: np.ndarray, p: np.ndarray, k: int, seg_roll: np.ndarray, seg_curv: np.ndarray,
                    seg_len: np.ndarray, n: int, backwards: bool = False) -> None:
     """Keep the ``n`` shot segments from node ``k`` as the fallback (3d), waiting P_FALL_WAIT expansions, or
@@ -845,10 +852,10 @@ def search_chunk(
             #     A Reeds–Shepp fallback that makes the path roll mostly backwards (3b) waits P_BACK_WAIT × as long,
             #     gives way to any other fallback and to a held shot (3c, which keeps the room), and is not kept while
             #     a shot is held (tenth round: pockets#5 of seed 1, 3 901 -> 1 702 expansions, 9.71 -> 8.63 m)
-            fall = keep > 0.0 and p[P_FALL_WAIT] > 0.0 and (counters[C_FALL_SEGS] == 0 or counters[C_FALL_BACKWARDS])
             n, short = _shot_or_fallback(clear, blocked, p, offx, offy, px, py, x, y, yaw, roll, p[P_GX], p[P_GY],
                                          p[P_GYAW], 0.0, seg_roll, seg_curv, seg_len,
-                                         2.0 * h_here + 1e-6 if allow_reverse else math.inf, keep, SHOT_DUBINS, fall)
+                                         2.0 * h_here + 1e-6 if allow_reverse else math.inf, keep, SHOT_DUBINS,
+                                         _may_fall(counters, p, keep))
             if short:
                 _keep_fallback(counters, p, k, seg_roll, seg_curv, seg_len, n)
             elif n > 0:
@@ -875,11 +882,9 @@ def search_chunk(
             keep = max(0.0, min(p[P_PREFERRED], here, goal_pose_margin))
             n = 0
             for kind in (SHOT_WEIGHTED, SHOT_SHORTEST, SHOT_SECOND, SHOT_THIRD):
-                fall = keep > 0.0 and p[P_FALL_WAIT] > 0.0 and (counters[C_FALL_SEGS] == 0
-                                                                 or counters[C_FALL_BACKWARDS])
                 n, short = _shot_or_fallback(clear, blocked, p, offx, offy, px, py, sx, sy, syaw, sroll, p[P_GX],
                                              p[P_GY], p[P_GYAW], 0.0, seg_roll, seg_curv, seg_len, MAX_SHOT_M, keep,
-                                             kind, fall)
+                                             kind, _may_fall(counters, p, keep))
                 if short:
                     back, total = _backwards(node_f, node_i, src, step, seg_len, n)
                     if back <= p[P_BACK_SHARE] * total:

@@ -876,44 +876,38 @@ class HybridAStar:
         self, start: Pose, motions: list[tuple[float, float, float]], p: np.ndarray, max_tries: int,
         recheck: int = 1, counts: np.ndarray | None = None,
     ) -> list[tuple[float, float, float]]:
-        """Shortcut the path with forward shots (which may also replace a manoeuvre with cusps), then, when it
-        still has cusps and rolls backwards somewhere, with reverse shots across it all
-        (:meth:`_reverse_across_cusps`), then each stretch travelled backwards with reverse shots; the cusps left
-        stay where they are.
+        """Shortcut the path with forward shots (which may also replace a manoeuvre with cusps); then, when it
+        still has cusps and rolls backwards somewhere, the whole path with reverse shots (a shorter one may replace a
+        manoeuvre in a path that rolls backwards, which the forward shots cannot: the sphere faces the other way);
+        then each stretch travelled backwards with reverse shots. The cusps left stay where they are.
 
-        A reverse stretch is shortcut as the forward one it mirrors: with the heading turned by π the
-        sphere rolls it forwards with every roll and curvature negated (eq. 1 is unchanged under
-        (yaw, φ, κ, s) → (yaw + π, −φ, −κ, −s)) and the footprint turned by π with it. ``recheck`` and
-        ``counts`` are ``kernels.shortcut``'s.
+        Reverse shots are :meth:`_shortcut_backwards`'s. ``recheck`` and ``counts`` are ``kernels.shortcut``'s.
         """
         counts = np.zeros(4, dtype=np.int64) if counts is None else counts
         motions = self._shortcut_run(start, 0.0, motions, p, max_tries, False, recheck, counts)
         if _cusps(motions) and any(s < 0 for _, _, s in motions):
-            motions = self._reverse_across_cusps(start, motions, p, max_tries, recheck, counts)
+            motions = self._shortcut_backwards(start, 0.0, motions, p, max_tries, recheck, counts)
         out: list[tuple[float, float, float]] = []
         x, y, yaw = start
         roll = 0.0
         for direction, run in _direction_runs(motions):
-            if direction > 0:
-                out.extend(run)
-            else:
-                mirrored = [(-h, -c, -s) for h, c, s in run]
-                done = self._shortcut_run((x, y, yaw + math.pi), -roll, mirrored, p, max_tries, True, recheck, counts)
-                out.extend((-h, -c, -s) for h, c, s in done)
+            out.extend(run if direction > 0 else
+                       self._shortcut_backwards((x, y, yaw), roll, run, p, max_tries, recheck, counts))
             end = self._knots((x, y, yaw), run, roll)[-1]
             x, y, yaw, roll = float(end[0]), float(end[1]), float(end[2]), float(end[3])
         return out
 
-    def _reverse_across_cusps(
-        self, start: Pose, motions: list[tuple[float, float, float]], p: np.ndarray, max_tries: int, recheck: int,
-        counts: np.ndarray,
+    def _shortcut_backwards(
+        self, pose: Pose, roll: float, motions: list[tuple[float, float, float]], p: np.ndarray, max_tries: int,
+        recheck: int, counts: np.ndarray,
     ) -> list[tuple[float, float, float]]:
-        """Shortcut the whole path with reverse shots, the path mirrored as in :meth:`_shortcut`: a shorter reverse
-        shot may replace a manoeuvre (cusps and the forward bits between them) in a path that rolls backwards, which
-        the shortcuts within each stretch of one direction leave in place."""
+        """:meth:`_shortcut_run` with reverse shots: the motions from ``pose`` at ``roll`` are shortcut as the
+        forward ones they mirror. With the heading turned by π the sphere rolls them forwards with every roll and
+        curvature negated (eq. 1 is unchanged under (yaw, φ, κ, s) → (yaw + π, −φ, −κ, −s)) and the footprint turned
+        by π with it."""
         mirrored = [(-h, -c, -s) for h, c, s in motions]
-        done = self._shortcut_run((start[0], start[1], start[2] + math.pi), 0.0, mirrored, p, max_tries, True,
-                                  recheck, counts)
+        done = self._shortcut_run((pose[0], pose[1], pose[2] + math.pi), -roll, mirrored, p, max_tries, True, recheck,
+                                  counts)
         return [(-h + 0.0, -c + 0.0, -s + 0.0) for h, c, s in done]
 
     def _footprint_arrays(self, flip: bool = False) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
