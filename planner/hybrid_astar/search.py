@@ -780,20 +780,22 @@ class HybridAStar:
         FORWARD_RETRY_TIMES × the plan's ``spent`` expansions (:meth:`forward_budget`) and what is left of the time
         limit; the cheaper of the two paths is returned. It is not run when a forward-only search of the reverse
         problem from the goal exhausts within FORWARD_CHECK_BUDGET expansions (no forward path reaches the goal);
-        that check's expansions are appended to ``checked``.
+        that check's expansions are appended to ``checked``. The check is skipped when the forward search's own
+        budget is no larger than the check's (it would cost more than it can spare: issue 21's eleventh round).
         """
         if not self._mostly_backwards(start, motions):
             return None, None
         cost = self._travel_cost(start, motions, o)
         if dubins_distance(*start, *goal, self.robot.min_turning_radius_m) >= cost:
             return None, None
-        if self.goal_side_ok and self._reverse_search(
+        cap = self.forward_budget(start, goal, spent)
+        if cap > FORWARD_CHECK_BUDGET and self.goal_side_ok and self._reverse_search(
                 start, goal, o, clock, reverse=False, budget=FORWARD_CHECK_BUDGET, spent=checked) is not None:
             return None, None  # the goal cannot be approached rolling forwards: no forward path exists
         run = _Search(self, start, goal, heur, o, False)
         run.p[kernels.P_BOUND] = bound
         try:
-            self._drive(run, start, goal, o, clock, fail_fast=False, cap=self.forward_budget(start, goal, spent))
+            self._drive(run, start, goal, o, clock, fail_fast=False, cap=cap)
         except PlannerCancelled:
             raise
         except PlanningError:
@@ -804,8 +806,8 @@ class HybridAStar:
     @staticmethod
     def forward_budget(start: Pose, goal: Pose, spent: int = 0) -> int:
         """Expansions the forward-only alternative search may take: FORWARD_RETRY_PER_M per metre of the straight
-        start–goal distance, at most FORWARD_RETRY_TIMES × ``spent`` (the expansions the plan made before it, when
-        given) and FORWARD_RETRY_MAX, at least FORWARD_RETRY_MIN.
+        start–goal distance, at least FORWARD_RETRY_MIN and at most FORWARD_RETRY_MAX; and at most
+        FORWARD_RETRY_TIMES × ``spent`` (the expansions the plan made before it, when given), below that floor too.
 
         Measured on 480 real-map problems (seeds 0–7 of the real bench): the 17 forward paths accepted took 7–371
         expansions per metre (one above 240), on the open 4-million-cell field mostly; in the bays, pockets and
@@ -815,10 +817,10 @@ class HybridAStar:
         forward search stuck before a gap the holonomic heuristic passes and the footprint does not).
         """
         d = math.hypot(goal[0] - start[0], goal[1] - start[1])
-        cap = min(float(FORWARD_RETRY_MAX), FORWARD_RETRY_PER_M * d)
+        cap = min(float(FORWARD_RETRY_MAX), max(float(FORWARD_RETRY_MIN), FORWARD_RETRY_PER_M * d))
         if spent:
             cap = min(cap, FORWARD_RETRY_TIMES * spent)
-        return int(max(FORWARD_RETRY_MIN, cap))
+        return int(cap)
 
     def _search_cost(self, run: _Search) -> float:
         """A lower bound of the search's own cost (g) of the path ``run`` found: the result node's g and the

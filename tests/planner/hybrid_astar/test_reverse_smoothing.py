@@ -169,10 +169,12 @@ def test_the_forward_search_gets_a_budget_by_distance() -> None:
     assert HybridAStar.forward_budget((0.0, 0.0, 0.0), (0.6, 0.8, 1.0)) == FORWARD_RETRY_MIN == 1_000
     assert HybridAStar.forward_budget((0.0, 0.0, 0.0), (60.0, 80.0, 1.0)) == 20_000 == FORWARD_RETRY_MAX
     assert HybridAStar.forward_budget((0.0, 0.0, 0.0), (12.0, 16.0, 1.0)) == 5_000
-    # ... and at most three times the expansions the plan made before it (never below the floor)
+    # ... and at most three times the expansions the plan made before it, below the floor too (issue 21's eleventh
+    # round: a plan found in 57 expansions ran a forward search of 1 000 that found nothing, depot#1 of seed 0)
     assert HybridAStar.forward_budget((0.0, 0.0, 0.0), (60.0, 80.0, 1.0), spent=1_800) == 5_400
     assert HybridAStar.forward_budget((0.0, 0.0, 0.0), (12.0, 16.0, 1.0), spent=10_000) == 5_000
-    assert HybridAStar.forward_budget((0.0, 0.0, 0.0), (12.0, 16.0, 1.0), spent=100) == FORWARD_RETRY_MIN
+    assert HybridAStar.forward_budget((0.0, 0.0, 0.0), (12.0, 16.0, 1.0), spent=100) == 300
+    assert HybridAStar.forward_budget((0.0, 0.0, 0.0), (0.6, 0.8, 1.0), spent=1_000) == FORWARD_RETRY_MIN
     grid = load_map("maps/real/smoothers_world.yaml")
     start, goal = (9.275, 5.325, -0.9024881717968012), (7.875, 2.025, -1.7184486953680036)
     result = HybridAStar(grid, ROBOT).plan(start, goal)
@@ -180,6 +182,26 @@ def test_the_forward_search_gets_a_budget_by_distance() -> None:
     assert _backwards_m(result.states) > 0.5 * result.length_m
     assert "forward_alternative" not in result.extra
     assert 0 < result.extra["forward_alternative_expansions"] <= FORWARD_RETRY_MIN
+
+
+def test_a_plan_found_quickly_spends_little_on_the_forward_alternative() -> None:
+    """depot#1 of the real-map bench's seed 0: the search holds back a shot that rolls mostly backwards and takes it
+    after 57 expansions. The forward-only alternative then gets 3 × those (171), not the floor of 1 000 that found
+    nothing cheaper; and the forward-only goal check is skipped, since its own 600 expansions would cost more than
+    the search it may spare (before issue 21's eleventh round: 57 + 600 + 1 000 expansions, 18 × BIT*'s first
+    solution; now 228)."""
+    from planner.hybrid_astar.search import FORWARD_CHECK_BUDGET, FORWARD_RETRY_TIMES
+
+    grid = load_map("maps/real/depot.yaml")
+    start, goal = (26.025, 9.575, 0.06727095832306862), (10.625, 9.575, 3.1096574102329626)
+    result = HybridAStar(grid, ROBOT).plan(start, goal)
+    assert check_path(grid, ROBOT, result.states, start, goal) == []
+    assert result.extra.get("held_shot_taken")
+    searched = result.expansions - result.extra["forward_alternative_expansions"]
+    assert 0 < result.extra["forward_alternative_expansions"] <= FORWARD_RETRY_TIMES * searched
+    assert FORWARD_RETRY_TIMES * searched <= FORWARD_CHECK_BUDGET
+    assert "forward_check_expansions" not in result.extra
+    assert result.expansions < 400
 
 
 def test_a_manoeuvre_in_a_path_that_rolls_backwards_is_shortcut_with_a_reverse_shot() -> None:
