@@ -506,7 +506,7 @@ def shot_length(radius: float, roll: float, groll: float, seg_roll: np.ndarray, 
 def _probe_margin(
     clear: np.ndarray, blocked: np.ndarray, p: np.ndarray, offx: np.ndarray, offy: np.ndarray, px: np.ndarray,
     py: np.ndarray, x: float, y: float, yaw: float, roll: float, seg_roll: np.ndarray, seg_curv: np.ndarray,
-    seg_len: np.ndarray, n: int, min_margin: float,
+    seg_len: np.ndarray, n: int, min_margin: float, scratch: np.ndarray,
 ) -> float:
     """The smallest footprint margin at five poses of each of the ``n`` motions (at 1/2, 1/4, 3/4, 1/8 and 7/8 of
     its arc, rolled as :func:`shot_margin` rolls them), stopping below ``min_margin``: a few poses that find most
@@ -515,11 +515,13 @@ def _probe_margin(
 
     The poses are visited by fraction first (every motion's middle, then every motion's quarter, ...): a shot that
     cuts a corner usually does so in one of its motions, and that motion's middle is then the second or third pose
-    tried rather than up to the eleventh. The poses are the same in any order, and so is the decision."""
+    tried rather than up to the eleventh. The poses are the same in any order, and so is the decision.
+
+    ``scratch`` (3, ≥ n) holds the motions' start poses (allocated once by the caller: thousands of probes a plan)."""
     radius = p[P_RADIUS]
-    sx = np.empty(n)
-    sy = np.empty(n)
-    syaw = np.empty(n)
+    sx = scratch[0]
+    sy = scratch[1]
+    syaw = scratch[2]
     cx, cy, cyaw, croll = x, y, yaw, roll
     for k in range(n):
         cx, cy = roll_shift(cx, cy, cyaw, radius, seg_roll[k] - croll)
@@ -539,19 +541,44 @@ def _probe_margin(
 
 
 @njit(cache=True)
+def _range_min_table(values: np.ndarray) -> np.ndarray:
+    """Sparse table of ``values`` for :func:`_range_min`: row r holds the minimum of each run of 2^r values (the
+    smoother's smallest knot margin between two knots, looked up for the few shots built, not rebuilt a knot at a
+    time: that was O(n) a knot, O(n²) a pass)."""
+    n = values.size
+    levels = 1
+    while (1 << levels) <= n:
+        levels += 1
+    table = np.empty((levels, max(n, 1)))
+    table[0, :n] = values
+    for r in range(1, levels):
+        half = 1 << (r - 1)
+        for k in range(n - (1 << r) + 1):
+            table[r, k] = min(table[r - 1, k], table[r - 1, k + half])
+    return table
+
+
+@njit(cache=True)
+def _range_min(table: np.ndarray, i: int, j: int) -> float:
+    """The minimum of the values i..j (both included) of :func:`_range_min_table`'s ``table``."""
+    r = 0
+    while (2 << r) <= j - i + 1:
+        r += 1
+    return min(table[r, i], table[r, j - (1 << r) + 1])
+
+
+@njit(cache=True)
 def _shortcut_from(
     clear: np.ndarray, blocked: np.ndarray, p: np.ndarray, offx: np.ndarray, offy: np.ndarray, px: np.ndarray,
     py: np.ndarray, knots: np.ndarray, cum: np.ndarray, max_tries: int, recheck: int, knot_margin: np.ndarray,
     least: np.ndarray, failed_from: np.ndarray, i: int, sr: np.ndarray, sc: np.ndarray, sl: np.ndarray,
-    turns: np.ndarray, lens: np.ndarray, counts: np.ndarray,
+    turns: np.ndarray, lens: np.ndarray, counts: np.ndarray, probe: np.ndarray,
 ) -> tuple[int, int]:
     """:func:`shortcut`'s tries from knot ``i``: the farthest candidate target j reached by a valid, shorter shot
-    and the shot's number of segments (in ``sr``, ``sc``, ``sl``), or (−1, 0)."""
+    and the shot's number of segments (in ``sr``, ``sc``, ``sl``), or (−1, 0). ``least`` is
+    :func:`_range_min_table` of the knots' margins."""
     n = knots.shape[0]
     stride = max(1, (n - 2 - i) // max_tries)
-    least[i] = knot_margin[i]
-    for k in range(i + 1, n):
-        least[k] = min(least[k - 1], knot_margin[k])
     x, y, yaw, roll = knots[i, 0], knots[i, 1], knots[i, 2], knots[i, 3]
     j = n - 1
     while j > i + 1:
@@ -570,8 +597,9 @@ def _shortcut_from(
         if m < 0:
             counts[1] += 1
         if m > 0:
-            stretch = min(p[P_PREFERRED], max(least[j], LEAST_KEPT_MARGIN_M))
-            if _probe_margin(clear, blocked, p, offx, offy, px, py, x, y, yaw, roll, sr, sc, sl, m, stretch) < stretch:
+            stretch = min(p[P_PREFERRED], max(_range_min(least, i, j), LEAST_KEPT_MARGIN_M))
+            if _probe_margin(clear, blocked, p, offx, offy, px, py, x, y, yaw, roll, sr, sc, sl, m, stretch,
+                             probe) < stretch:
                 m = 0
             elif shot_margin(clear, blocked, p, offx, offy, px, py, x, y, yaw, roll, sr, sc, sl, m, knots[j, 3],
                              stretch) >= stretch:
@@ -622,14 +650,15 @@ def shortcut(
     bl = np.zeros(MAX_SHOT_SEGS)
     turns = np.zeros(RS_MAX_SEGS, dtype=np.int64)
     lens = np.zeros(RS_MAX_SEGS)
+    probe = np.empty((3, MAX_SHOT_SEGS))  # _probe_margin's scratch
     failed_from = np.full(n, -n - recheck, dtype=np.int64)  # failed_from[j]: the last knot whose shot to j failed
-    least = np.empty(n)  # least[j]: the smallest knot margin from knot i to knot j
+    least = _range_min_table(knot_margin)  # the smallest knot margin from knot i to knot j, for any i ≤ j
     count = 0
     i = 0
     first = 0  # the first knot since the last shortcut (knots before it are not tried again)
     while i < n - 2:
         j, m = _shortcut_from(clear, blocked, p, offx, offy, px, py, knots, cum, max_tries, recheck, knot_margin,
-                              least, failed_from, i, sr, sc, sl, turns, lens, counts)
+                              least, failed_from, i, sr, sc, sl, turns, lens, counts, probe)
         if j < 0:
             i += 1
             continue
@@ -638,7 +667,7 @@ def shortcut(
         if recheck > 1:
             for i2 in range(i - 1, max(first, i - recheck + 1) - 1, -1):
                 j2, m2 = _shortcut_from(clear, blocked, p, offx, offy, px, py, knots, cum, max_tries, 1, knot_margin,
-                                        least, failed_from, i2, sr, sc, sl, turns, lens, counts)
+                                        least, failed_from, i2, sr, sc, sl, turns, lens, counts, probe)
                 if j2 < 0:
                     break
                 i, j, m = i2, j2, m2

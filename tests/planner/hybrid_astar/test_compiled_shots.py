@@ -333,7 +333,8 @@ def test_the_shortcut_probe_decides_on_its_five_poses_per_motion() -> None:
         want = float(rng.uniform(0.0, 0.4))
         p = planner._params((x, y, yaw), True)
         probe = kernels._probe_margin(cm.clearance, cm.blocked, p, fp.offsets_x, fp.offsets_y, planner._px,
-                                      planner._py, x, y, yaw, roll, sr, sc, sl, n, want)
+                                      planner._py, x, y, yaw, roll, sr, sc, sl, n, want,
+                                      np.full((3, kernels.MAX_SHOT_SEGS), np.nan))
         poses = []
         cx, cy, cyaw, croll = x, y, yaw, roll
         for k in range(n):

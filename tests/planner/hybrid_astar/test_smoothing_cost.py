@@ -98,3 +98,19 @@ def test_a_stretch_closer_than_the_preferred_clearance_is_shortcut_keeping_its_o
     else:  # the stretch's own margin is under the floor: no shortcut may come that close
         assert margin < kernels.LEAST_KEPT_MARGIN_M
         assert counts[3] == 0 and after == before
+
+
+def test_the_smallest_knot_margin_between_two_knots_is_the_range_minimum() -> None:
+    """The smoother asks for the smallest knot margin between the shot's two knots (a shortcut keeps at least that
+    room): a sparse table answers it for any pair, as a scan of the range does (lengths 1 to 300, every pair of
+    the short ones; ties and negative margins included)."""
+    from planner.hybrid_astar.kernels import _range_min, _range_min_table
+
+    rng = np.random.default_rng(3)
+    for n in (1, 2, 3, 5, 8, 17, 64, 300):
+        values = np.round(rng.normal(0.2, 0.3, n), 2)
+        table = _range_min_table(values)
+        pairs = [(i, j) for i in range(n) for j in range(i, n)] if n <= 64 else \
+            [tuple(sorted(rng.integers(0, n, 2))) for _ in range(2000)]
+        for i, j in pairs:
+            assert _range_min(table, int(i), int(j)) == values[i:j + 1].min()
