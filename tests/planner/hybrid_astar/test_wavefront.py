@@ -126,14 +126,16 @@ def test_steps_longer_than_the_queue_ring_are_still_exact():
 
 def test_the_work_is_in_proportion_to_the_part_computed():
     """On a large open grid, a start 5 m from the goal expands the cells of the ellipse around them (about
-    π·a·b with a = B/2, b = √(B² − d²)/2, B = 1.3·d + 2 m), a small part of the map, and each expanded cell
-    queues about one to two entries; with no start every cell is expanded."""
+    π·a·b with a = B/2, b = √(B² − d²)/2, B = STOP_FACTOR·d + STOP_MARGIN_M), a small part of the map, and each
+    expanded cell queues about one to two entries; with no start every cell is expanded."""
+    from planner.hybrid_astar.heuristics import STOP_FACTOR, STOP_MARGIN_M
+
     n, cell = 400, 0.1
     mult = np.ones((n, n))
     goal, start = (20.0, 20.0), (25.0, 20.0)
     near = HolonomicHeuristic(mult, (0.0, 0.0), cell, goal, start)
     d = 5.0
-    bound = 1.3 * d + 2.0
+    bound = STOP_FACTOR * d + STOP_MARGIN_M
     ellipse = math.pi * (bound / 2) * (math.sqrt(bound ** 2 - d ** 2) / 2) / cell ** 2
     assert 0.8 * ellipse < near.expanded < 1.3 * ellipse
     assert near.expanded < 0.05 * n * n
@@ -147,10 +149,12 @@ def test_the_work_is_in_proportion_to_the_part_computed():
 def test_the_goal_sides_table_is_guided_by_the_forward_one():
     """The table towards the start (the goal side's) takes the forward table, a lower bound of the cost to the
     start's cell, as its A*'s estimate: still never above the exact cost, exact where cost from the start +
-    that estimate is below the bound, and fewer cells expanded than with the straight distance alone."""
+    that estimate is below the bound, and fewer cells expanded than with the straight distance alone when the
+    forward table is exact well around the way (here 1.3 × + 2 m: with the planner's 1.1 × + 1 m this map's guided
+    table expands 3 % more cells than the plain one; on the real maps 20 % fewer, docs/planning.md)."""
     mult, cell = _obstacle_mult()
     goal, start = (25.0, 6.0), (15.0, 3.0)
-    forward = HolonomicHeuristic(mult, (0.0, 0.0), cell, goal, start)
+    forward = HolonomicHeuristic(mult, (0.0, 0.0), cell, goal, start, stop_factor=1.3, stop_margin_m=2.0)
     raw = exact_costs(mult, _cell(start, cell), cell)
     exact = as_table(raw, cell)
     plain = HolonomicHeuristic(mult, (0.0, 0.0), cell, start, goal, stop_factor=1.2)
@@ -174,7 +178,7 @@ def test_the_planner_guides_the_goal_sides_table_by_the_cached_forward_one():
     occ[3:200, 200:220] = True                # a wall from below at x ≈ 10 m: the way goes round its top
     planner = HybridAStar(OccupancyGrid.from_occupied(occ, 0.05), load_robot())
     goal, start = (14.0, 2.0), (6.0, 2.0)
-    forward = planner.holonomic(goal, start)
+    forward = planner.holonomic(goal, start, 1.5)  # exact well around the way (see the test above)
     back = planner.holonomic(start, goal, 1.2)
     assert back._guide is not None and back._guide() is forward.table
     alone = HolonomicHeuristic(planner.holonomic_mult, (planner.clearance.origin_x, planner.clearance.origin_y),
