@@ -90,6 +90,7 @@ FORWARD_RETRY_MAX = 20_000  # ... and at most this many (docs/planning.md: the b
 FORWARD_RETRY_SHARE = 0.5  # ... tried when the path found rolls more than this share of its length backwards
 FORWARD_RETRY_TIMES = 3  # ... and at most this many × the plan's expansions before it
 FORWARD_CHECK_BUDGET = 600  # ... unless a forward-only search from the goal exhausts within this many (a dead end)
+FORWARD_CHECK_WORTH = 4  # ... a check run only when the forward search may take more than this many × its budget
 _LOOP = threading.local()  # the current thread's plan: its clock, its seconds in the compiled loop (search_loop_time_s)
 GROWTH_MARGIN = 2.5  # a search's storage grows only when this × its last growth's time still fits before the deadline
 # Smoothing's recheck rule (kernels.shortcut): a target whose shot failed from a knot just before is retried only
@@ -780,8 +781,10 @@ class HybridAStar:
         FORWARD_RETRY_TIMES × the plan's ``spent`` expansions (:meth:`forward_budget`) and what is left of the time
         limit; the cheaper of the two paths is returned. It is not run when a forward-only search of the reverse
         problem from the goal exhausts within FORWARD_CHECK_BUDGET expansions (no forward path reaches the goal);
-        that check's expansions are appended to ``checked``. The check is skipped when the forward search's own
-        budget is no larger than the check's (it would cost more than it can spare: issue 21's eleventh round).
+        that check's expansions are appended to ``checked``. The check is run only when the forward search's own
+        budget exceeds FORWARD_CHECK_WORTH × the check's: it exhausts on about one in five plans, and below that
+        it costs more than it spares (issue 21's eleventh round). Either way the path is the same: where the
+        check exhausts no forward path exists, and the forward search finds none.
         """
         if not self._mostly_backwards(start, motions):
             return None, None
@@ -789,7 +792,7 @@ class HybridAStar:
         if dubins_distance(*start, *goal, self.robot.min_turning_radius_m) >= cost:
             return None, None
         cap = self.forward_budget(start, goal, spent)
-        if cap > FORWARD_CHECK_BUDGET and self.goal_side_ok and self._reverse_search(
+        if cap > FORWARD_CHECK_WORTH * FORWARD_CHECK_BUDGET and self.goal_side_ok and self._reverse_search(
                 start, goal, o, clock, reverse=False, budget=FORWARD_CHECK_BUDGET, spent=checked) is not None:
             return None, None  # the goal cannot be approached rolling forwards: no forward path exists
         run = _Search(self, start, goal, heur, o, False)

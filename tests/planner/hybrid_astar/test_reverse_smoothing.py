@@ -204,6 +204,23 @@ def test_a_plan_found_quickly_spends_little_on_the_forward_alternative() -> None
     assert result.expansions < 400
 
 
+def test_the_forward_check_runs_only_before_a_dear_forward_search() -> None:
+    """smoothers_world#9 of the real-map bench's seed 0: the forward alternative may take 1 000 expansions, within
+    FORWARD_CHECK_WORTH × the check's 600. The check is not run (it proved this goal's pocket in 195 expansions; over
+    the 121 checks of seeds 0–7 the checks that did not exhaust cost 600 each and those below 4 × 600 spared 1 000–2 400
+    only 5 times in 46), and the forward search itself ends at once: no forward path within the path's cost."""
+    from planner.hybrid_astar.search import FORWARD_CHECK_BUDGET, FORWARD_CHECK_WORTH
+
+    grid = load_map("maps/real/smoothers_world.yaml")
+    start, goal = (11.225, 4.375, -2.0729579111761445), (9.825, 1.125, 1.6366855694506848)
+    assert FORWARD_CHECK_BUDGET < HybridAStar.forward_budget(start, goal) <= FORWARD_CHECK_WORTH * FORWARD_CHECK_BUDGET
+    result = HybridAStar(grid, ROBOT).plan(start, goal)
+    assert check_path(grid, ROBOT, result.states, start, goal) == []
+    assert "forward_check_expansions" not in result.extra
+    assert 0 < result.extra["forward_alternative_expansions"] < 50
+    assert "forward_alternative" not in result.extra
+
+
 def test_a_manoeuvre_in_a_path_that_rolls_backwards_is_shortcut_with_a_reverse_shot() -> None:
     """A join of the two-ended search (meet.py) can bring a manoeuvre into a path that rolls backwards: back up, a
     bit forwards on the other lock, back up again. The stretches of one direction are shortcut one by one and a
