@@ -570,7 +570,7 @@ def _range_min(table: np.ndarray, i: int, j: int) -> float:
 @njit(cache=True)
 def _shortcut_from(
     clear: np.ndarray, blocked: np.ndarray, p: np.ndarray, offx: np.ndarray, offy: np.ndarray, px: np.ndarray,
-    py: np.ndarray, knots: np.ndarray, cum: np.ndarray, max_tries: int, recheck: int, knot_margin: np.ndarray,
+    py: np.ndarray, knots: np.ndarray, cum: np.ndarray, max_tries: int, recheck: int,
     least: np.ndarray, failed_from: np.ndarray, i: int, sr: np.ndarray, sc: np.ndarray, sl: np.ndarray,
     turns: np.ndarray, lens: np.ndarray, counts: np.ndarray, probe: np.ndarray,
 ) -> tuple[int, int]:
@@ -657,8 +657,8 @@ def shortcut(
     i = 0
     first = 0  # the first knot since the last shortcut (knots before it are not tried again)
     while i < n - 2:
-        j, m = _shortcut_from(clear, blocked, p, offx, offy, px, py, knots, cum, max_tries, recheck, knot_margin,
-                              least, failed_from, i, sr, sc, sl, turns, lens, counts, probe)
+        j, m = _shortcut_from(clear, blocked, p, offx, offy, px, py, knots, cum, max_tries, recheck, least,
+                              failed_from, i, sr, sc, sl, turns, lens, counts, probe)
         if j < 0:
             i += 1
             continue
@@ -666,8 +666,8 @@ def shortcut(
             br[k], bc[k], bl[k] = sr[k], sc[k], sl[k]
         if recheck > 1:
             for i2 in range(i - 1, max(first, i - recheck + 1) - 1, -1):
-                j2, m2 = _shortcut_from(clear, blocked, p, offx, offy, px, py, knots, cum, max_tries, 1, knot_margin,
-                                        least, failed_from, i2, sr, sc, sl, turns, lens, counts, probe)
+                j2, m2 = _shortcut_from(clear, blocked, p, offx, offy, px, py, knots, cum, max_tries, 1, least,
+                                        failed_from, i2, sr, sc, sl, turns, lens, counts, probe)
                 if j2 < 0:
                     break
                 i, j, m = i2, j2, m2

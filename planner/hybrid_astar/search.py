@@ -285,8 +285,8 @@ def _cusps(motions: list[tuple[float, float, float]]) -> int:
     return n
 
 
-BACK_FALLBACK_WAIT = 1.5
 FALLBACK_WAIT = 400  # kernels 3d: expansions a shot that keeps less room than asked waits for one that keeps it
+BACK_FALLBACK_WAIT = 1.5  # ... this × as many when the shot makes the path roll mostly backwards (kernels P_BACK_WAIT)
 
 
 def _take_kept(run: _Search) -> bool:

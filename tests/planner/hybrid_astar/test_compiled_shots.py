@@ -473,7 +473,7 @@ def test_a_shot_backwards_that_keeps_less_room_than_asked_is_a_fallback_too(monk
     assert result.length_m < 0.93 * without.length_m and result.expansions < 0.6 * without.expansions
 
 
-def test_a_fallback_that_rolls_backwards_gives_way(monkeypatch) -> None:
+def test_a_fallback_that_rolls_backwards_gives_way() -> None:
     """A mostly-backwards fallback gives way to a fallback that is not (which then waits FALLBACK_WAIT only) and to a
     shot held back (3c), which keeps the room: on warehouse#3 the held shot's path keeps 0.48 m where the grazing
     fallback's kept 0.03 m."""
