@@ -112,7 +112,7 @@ class PlannerOptions:
     paper is silent."""
 
     n_rolls: int = 7                  # discrete held rolls in [−φmax, φmax] (odd, ≥ 5), even in curvature
-    n_yaw_bins: int = 72              # closed-set heading bins (5°)
+    n_yaw_bins: int = 36              # closed-set heading bins (10°)
     n_roll_bins: int = 3              # closed-set roll bins (left/upright/right; 0 = one per held roll)
     step_m: float = 0.0               # arc length per expansion; 0 = automatic (see ``resolved_step``)
     open_step_factor: int = 3         # in the open (clearance > footprint reach + the longer arc), steps this long
@@ -128,7 +128,7 @@ class PlannerOptions:
     switch_cost_m: float = 1.0
     cost_penalty: float = 2.0         # proximity weight (Nav2 ``cost_penalty``, same default)
     proximity_range_m: float = 1.0    # proximity cost fades to 0 this far beyond the inflated obstacles
-    greed: float = 1.0               # eq. 14j; 0 = admissible A* (slow: 7 rolls × 72 bins); smoothing recovers length
+    greed: float = 1.0               # eq. 14j; 0 = admissible A* (slow); smoothing recovers length
     analytic_ratio_m: float = 3.5     # try a Dubins shot every max(1, h / ratio) expansions
     heuristic_downsample: int = 0     # holonomic grid coarsening; 0 = auto (≥ 2, at most ~50k coarse cells)
     chunk_expansions: int = 500

@@ -27,6 +27,9 @@ from planner.termination import Termination
 from tests.pathcheck import check_path
 
 ROBOT = load_robot("zju-60")
+# Some scenarios below were found with 72 heading bins (5°), the default until issue 21's twelfth round, and keep
+# them: with the default 36 the search reaches those goals without the mechanism the test is about.
+SCENARIO_BINS = 72
 
 
 def _integrate(turns: np.ndarray, lens: np.ndarray) -> tuple[float, float, float]:
@@ -196,7 +199,7 @@ def test_a_path_found_while_a_shot_is_held_back_gives_way_to_it_when_that_costs_
     it rolled mostly backwards as well, it is. (Without the goal side's search, which would find some of these
     paths itself, the plan's search is the one run here.)"""
     grid = load_map(f"maps/real/{name}.yaml")
-    planner = HybridAStar(grid, ROBOT, PlannerOptions(dead_end_check=False))
+    planner = HybridAStar(grid, ROBOT, PlannerOptions(dead_end_check=False, n_yaw_bins=SCENARIO_BINS))
     o = planner.options
     run = _Search(planner, start, goal, planner.holonomic(goal[:2], start[:2]), o, True)
     assert run.step(100_000) == kernels.FOUND and run.counters[kernels.C_HELD_SEGS] > 0
@@ -403,11 +406,12 @@ def test_a_shot_that_keeps_less_room_than_asked_is_the_path_when_no_better_comes
 
     grid = load_map("maps/real/bays.yaml")
     start, goal = BAYS5
-    result = HybridAStar(grid, ROBOT, PlannerOptions()).plan(start, goal)
+    o = PlannerOptions(n_yaw_bins=SCENARIO_BINS)
+    result = HybridAStar(grid, ROBOT, o).plan(start, goal)
     assert result.extra.get("fallback_shot_taken") is True
     assert check_path(grid, ROBOT, result.states, start, goal) == []
     monkeypatch.setattr(search, "FALLBACK_WAIT", 0)
-    without = HybridAStar(grid, ROBOT, PlannerOptions()).plan(start, goal)
+    without = HybridAStar(grid, ROBOT, o).plan(start, goal)
     assert "fallback_shot_taken" not in without.extra
     assert without.expansions > 3 * result.expansions
     assert without.min_clearance_m < 0.05 and result.min_clearance_m < 0.05
@@ -464,11 +468,12 @@ def test_a_shot_backwards_that_keeps_less_room_than_asked_is_a_fallback_too(monk
 
     grid = load_map("maps/real/pockets.yaml")
     start, goal = POCKETS5
-    result = HybridAStar(grid, ROBOT, PlannerOptions()).plan(start, goal)
+    o = PlannerOptions(n_yaw_bins=SCENARIO_BINS)
+    result = HybridAStar(grid, ROBOT, o).plan(start, goal)
     assert result.extra.get("fallback_shot_taken") is True and result.extra["found_from"] == "start"
     assert check_path(grid, ROBOT, result.states, start, goal) == []
     monkeypatch.setattr(search, "BACK_FALLBACK_WAIT", 0.0)
-    without = HybridAStar(grid, ROBOT, PlannerOptions()).plan(start, goal)
+    without = HybridAStar(grid, ROBOT, o).plan(start, goal)
     assert "fallback_shot_taken" not in without.extra
     assert result.length_m < 0.93 * without.length_m and result.expansions < 0.6 * without.expansions
 

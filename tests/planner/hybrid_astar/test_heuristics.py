@@ -180,7 +180,7 @@ def test_reverse_search_uses_reeds_shepp_and_stays_valid():
     occ[:, :3] = occ[:, -3:] = True
     grid = OccupancyGrid.from_occupied(occ, 0.05)
     planner = HybridAStar(grid, load_robot(), PlannerOptions(allow_reverse=True))
-    assert planner.rs_table.shape[0] == 72
+    assert planner.rs_table.shape[0] == PlannerOptions().n_yaw_bins
     start, goal = (4.0, 4.0, 0.0), (3.0, 4.0, 0.0)      # one metre straight behind: reversing is best
     result = planner.plan(start, goal)
     assert check_path(grid, planner.robot, result.states, start, goal) == []
@@ -215,6 +215,7 @@ def test_the_weighted_table_is_used_only_when_asked():
     plain = HybridAStar(grid, robot, PlannerOptions(allow_reverse=True))
     weighted = HybridAStar(grid, robot, PlannerOptions(allow_reverse=True, weighted_rs_heuristic=True,
                                                        reverse_penalty=1.5, switch_cost_m=2.0))
-    assert plain.rs_table is reeds_shepp_table(rho, 72, 0.1)
-    assert weighted.rs_table is reeds_shepp_table(rho, 72, 0.1, reverse_penalty=1.5, switch_cost_m=2.0)
+    bins = PlannerOptions().n_yaw_bins
+    assert plain.rs_table is reeds_shepp_table(rho, bins, 0.1)
+    assert weighted.rs_table is reeds_shepp_table(rho, bins, 0.1, reverse_penalty=1.5, switch_cost_m=2.0)
     assert weighted.rs_table.max() > plain.rs_table.max()

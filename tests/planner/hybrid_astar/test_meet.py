@@ -18,6 +18,10 @@ from planner.termination import Termination
 from tests.pathcheck import check_path
 
 ROBOT = load_robot("zju-60")
+# Some scenarios below were found with 72 heading bins (5°), the default until issue 21's twelfth round, and keep
+# them: with the default 36 the search reaches those goals without the mechanism the test is about.
+SCENARIO_BINS = 72
+SCENARIO = PlannerOptions(n_yaw_bins=SCENARIO_BINS)
 UPRIGHT = 3  # roll index of the upright roll among 7
 
 
@@ -73,7 +77,7 @@ def _two_bays():
 def test_a_manoeuvre_at_both_ends_is_joined_in_the_middle(monkeypatch):
     grid, start, goal = _two_bays()
     cap = Termination(time_limit_s=120.0, max_iterations=40_000)
-    options = PlannerOptions(open_step_factor=1)
+    options = PlannerOptions(open_step_factor=1, n_yaw_bins=SCENARIO_BINS)
     result = HybridAStar(grid, ROBOT, options).plan(start, goal, cap)
     assert result.extra["found_from"] == "both"
     assert np.allclose(result.states[0, :3], start, atol=1e-9)
@@ -152,7 +156,7 @@ def _turn_round_in_a_corridor():
 def test_two_trees_that_roll_the_way_in_opposite_directions_are_joined_by_a_turn(monkeypatch):
     grid, start, goal = _turn_round_in_a_corridor()
     cap = Termination(time_limit_s=120.0, max_iterations=40_000)
-    result = HybridAStar(grid, ROBOT).plan(start, goal, cap)
+    result = HybridAStar(grid, ROBOT, SCENARIO).plan(start, goal, cap)
     assert result.extra["found_from"] == "both"
     assert 1 <= result.extra["turn_searches"] <= two_ended.TURN_TRIES
     assert 0 < result.extra["turn_expansions"] <= two_ended.TURN_TRIES * two_ended.TURN_BUDGET
@@ -162,7 +166,7 @@ def test_two_trees_that_roll_the_way_in_opposite_directions_are_joined_by_a_turn
     # without the turn search the same cap is not enough
     monkeypatch.setattr(two_ended, "TURN_TRIES", 0)
     with pytest.raises(NoValidPathFound):
-        HybridAStar(grid, ROBOT).plan(start, goal, cap)
+        HybridAStar(grid, ROBOT, SCENARIO).plan(start, goal, cap)
 
 
 def test_a_look_for_a_turn_that_finds_no_place_is_not_repeated_every_round(monkeypatch):
@@ -185,7 +189,7 @@ def test_a_look_for_a_turn_that_finds_no_place_is_not_repeated_every_round(monke
     monkeypatch.setattr(two_ended, "find_turn", nowhere)
     cap = Termination(time_limit_s=120.0, max_iterations=30_000)
     with pytest.raises(NoValidPathFound):
-        HybridAStar(grid, ROBOT).plan(start, goal, cap)
+        HybridAStar(grid, ROBOT, SCENARIO).plan(start, goal, cap)
     # shots join the trees from search.MEET_AFTER on, but the first look for a turn waits for TURN_AFTER (a turn
     # search costs up to TURN_BUDGET expansions: sooner, they cost more than they saved on the real-map problems)
     assert min(totals) < two_ended.TURN_AFTER <= min(looks)
@@ -217,5 +221,5 @@ def test_a_turn_search_stops_with_the_plan(monkeypatch):
     monkeypatch.setattr(two_ended, "TURN_BUDGET", 10**9)  # only the clock can stop a turn search
     monkeypatch.setattr(search._Search, "step", step)
     with pytest.raises(PlannerCancelled):
-        HybridAStar(grid, ROBOT).plan(start, goal, Termination(60.0, cancel=lambda: bool(cancelled)))
+        HybridAStar(grid, ROBOT, SCENARIO).plan(start, goal, Termination(60.0, cancel=lambda: bool(cancelled)))
     assert len(cancelled) == 1 and steps_after == []

@@ -16,6 +16,9 @@ from planner.robot import load_robot
 from tests.pathcheck import check_path
 
 ROBOT = load_robot("zju-60")
+# Some scenarios below were found with 72 heading bins (5°), the default until issue 21's twelfth round, and keep
+# them: with the default 36 the search reaches those goals without the mechanism the test is about.
+SCENARIO_BINS = 72
 # a sphere with a sensor boom 0.9 m ahead: not symmetric under a half turn, so a reverse stretch checked with
 # the footprint facing the wrong way would be checked against the wrong shape
 BOOM = dataclasses.replace(ROBOT, footprint=((0.9, 0.0), (0.3, 0.3), (-0.3, 0.3), (-0.3, -0.3), (0.3, -0.3)))
@@ -109,7 +112,7 @@ def test_a_path_that_must_back_out_is_left_alone() -> None:
     occ[52:, 160:] = True
     grid = OccupancyGrid.from_occupied(occ, 0.05, name="bay")
     start, goal = (10.5, 2.0, 0.0), (2.0, 2.0, math.pi)
-    result = HybridAStar(grid, ROBOT).plan(start, goal)
+    result = HybridAStar(grid, ROBOT, PlannerOptions(n_yaw_bins=SCENARIO_BINS)).plan(start, goal)
     assert check_path(grid, ROBOT, result.states, start, goal) == []
     assert _backwards_m(result.states) > 0.0 and result.extra["fallback_shot_taken"]
     assert "forward_alternative_expansions" not in result.extra
@@ -125,7 +128,7 @@ def test_a_goal_that_cannot_be_approached_forwards_skips_the_forward_search() ->
 
     grid = load_map("maps/real/pockets.yaml")
     start, goal = (26.875, 14.625, -2.1864988338850018), (4.825, 17.325, -1.1774962766354187)
-    o = PlannerOptions()
+    o = PlannerOptions(n_yaw_bins=SCENARIO_BINS)
     planner = HybridAStar(grid, ROBOT, o)
     result = planner.plan(start, goal)
     assert check_path(grid, ROBOT, result.states, start, goal) == []
@@ -150,7 +153,7 @@ def test_the_forward_check_budget_still_proves_the_deepest_dead_end_seen() -> No
 
     grid = load_map("maps/real/pockets.yaml")
     start, goal = (8.925, 3.525, 2.0387814393209416), (6.975, 17.375, 1.7503720758899775)
-    o = PlannerOptions()
+    o = PlannerOptions(n_yaw_bins=SCENARIO_BINS)
     result = HybridAStar(grid, ROBOT, o).plan(start, goal)
     assert check_path(grid, ROBOT, result.states, start, goal) == []
     assert 500 < result.extra["forward_check_expansions"] <= FORWARD_CHECK_BUDGET
