@@ -26,6 +26,7 @@ from planner.maps.catalogue import default_maps_dir
 from planner.maps.nav2 import load_map, snap_resolution
 from planner.termination import Termination
 from service.cli import build_parser, main
+from tests.scenarios import SCENARIO_BINS
 from tests.service import service_harness as harness
 from tests.service.service_harness import Server
 
@@ -287,7 +288,7 @@ def test_one_improvement_budget_one_improved_path_at_every_door(client: httpx.Cl
     first path); bad values are refused by name."""
     # (72 heading bins, the default until issue 21's twelfth round: with the default 36 the hall's first path is
     # already the shortest and leaves nothing to improve)
-    options = {"improve_until_s": 3, "n_yaw_bins": 72}
+    options = {"improve_until_s": 3, "n_yaw_bins": SCENARIO_BINS}
     body = harness.plan_body(time_limit_s=3, options=options)
     response = client.post("/v1/plan", json=body)
     assert response.status_code == 200, response.text[:300]
@@ -560,7 +561,7 @@ def test_a_real_map_plan_is_the_same_at_every_door(client: httpx.Client, server:
                              "origin": origin}, "data_gzip_b64": gz_b64(grid.data)},
             "start": dict(zip(("x", "y", "yaw"), start, strict=True)),
             "goal": dict(zip(("x", "y", "yaw"), goal, strict=True)), "time_limit_s": 3.0,  # the test server's bound
-            "options": {"n_yaw_bins": 72}}
+            "options": {"n_yaw_bins": SCENARIO_BINS}}
     response = client.post("/v1/plan", json=body)
     assert response.status_code == 200, response.text[:300]
     reply = zenoh_reply(server, "sphereplan/plan", body)

@@ -204,10 +204,12 @@ def test_a_budget_past_the_time_limit_answers_with_the_best_path() -> None:
     from planner.termination import Termination
     from service.pipeline import PlanQuery, execute_plan
     from tests.planner.hybrid_astar.test_search import two_walls
+    from tests.scenarios import SCENARIO_BINS
 
     # (72 heading bins, the default until issue 21's twelfth round: with the default 36 the greed-0 search ends in
     # time, and the limit is not what stops the rounds)
-    query = PlanQuery((2.0, 2.0, 0.0), (18.0, 18.0, math.pi / 2), PlannerOptions(improve_until_s=600.0, n_yaw_bins=72),
+    query = PlanQuery((2.0, 2.0, 0.0), (18.0, 18.0, math.pi / 2),
+                      PlannerOptions(improve_until_s=600.0, n_yaw_bins=SCENARIO_BINS),
                       Termination(3.0))  # (the rounds end 10 % early: 0.3 s of room for a loaded machine)
     result = execute_plan(query, two_walls(), load_robot())
     assert result.extra["improvement_stop"] == "time limit"

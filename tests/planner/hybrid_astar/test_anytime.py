@@ -20,15 +20,16 @@ from planner.occupancy import OccupancyGrid
 from planner.robot import load_robot
 from planner.termination import Termination
 from tests.pathcheck import check_path
+from tests.scenarios import SCENARIO_BINS
 from tests.service.service_harness import hall_grid
 
 # the service tests' hall (10 m × 8 m, a wall from the bottom at x = 5 m): the first path from (2, 2) to (8, 2)
 # goes round the wall 0.6 m longer than the path the admissible search finds, which finishes in well under a second
-# (with 72 heading bins, 5°: with the default 36 the first path is already the shortest and there is nothing to
-# improve, so these tests keep the finer bins)
+# (with 72 heading bins, tests.scenarios: with the default 36 the first path is already the shortest and there is
+# nothing to improve)
 START, GOAL = (2.0, 2.0, 0.0), (8.0, 2.0, 0.0)
 BUDGET_S = 20.0  # far more than the rounds need (≈ 0.2 s on an idle machine): they end by finishing
-BINS = 72
+BINS = SCENARIO_BINS
 
 
 def hall() -> OccupancyGrid:

@@ -25,11 +25,9 @@ from planner.occupancy import OccupancyGrid
 from planner.robot import load_robot
 from planner.termination import Termination
 from tests.pathcheck import check_path
+from tests.scenarios import SCENARIO_BINS  # scenarios found with 72 heading bins keep them
 
 ROBOT = load_robot("zju-60")
-# Some scenarios below were found with 72 heading bins (5°), the default until issue 21's twelfth round, and keep
-# them: with the default 36 the search reaches those goals without the mechanism the test is about.
-SCENARIO_BINS = 72
 
 
 def _integrate(turns: np.ndarray, lens: np.ndarray) -> tuple[float, float, float]:

@@ -16,11 +16,9 @@ from planner.maps.nav2 import load_map
 from planner.robot import load_robot
 from planner.termination import Termination
 from tests.pathcheck import check_path
+from tests.scenarios import SCENARIO_BINS  # scenarios found with 72 heading bins keep them
 
 ROBOT = load_robot("zju-60")
-# Some scenarios below were found with 72 heading bins (5°), the default until issue 21's twelfth round, and keep
-# them: with the default 36 the search reaches those goals without the mechanism the test is about.
-SCENARIO_BINS = 72
 SCENARIO = PlannerOptions(n_yaw_bins=SCENARIO_BINS)
 UPRIGHT = 3  # roll index of the upright roll among 7
 

@@ -13,6 +13,7 @@ import numba.core.dispatcher as dispatcher
 from planner.hybrid_astar import search
 from planner.maps.load import load_map
 from planner.robot import load_robot
+from tests.scenarios import SCENARIO_BINS
 
 search.warm_up()
 compiled = []
@@ -34,8 +35,9 @@ for name, start, goal, mark in (
      "forward_alternative_expansions"),
     ("bays", (22.575, 9.425, -1.3479617223735876), (17.575, 8.225, -0.3594680053165016), "improvements"),
 ):
-    # (scenarios found with 72 heading bins, the default until issue 21's twelfth round: they keep them)
-    options = search.PlannerOptions(improve_until_s=0.3 if mark == "improvements" else 0.0, n_yaw_bins=72)
+    # (scenarios found with 72 heading bins, the default until issue 21's twelfth round: tests.scenarios)
+    options = search.PlannerOptions(improve_until_s=0.3 if mark == "improvements" else 0.0,
+                                    n_yaw_bins=SCENARIO_BINS)
     result = search.HybridAStar(load_map(f"maps/real/{name}.yaml"), robot, options).plan(start, goal)
     assert result.extra.get(mark), (name, mark)
 print("compiled:", ",".join(compiled))
