@@ -534,26 +534,31 @@ def test_every_verb_ends_with_a_summary_line(capsys: pytest.CaptureFixture[str],
     assert code == 0 and not err.strip(), err
 
 
-@pytest.mark.parametrize("name, start, goal, mark", [
+@pytest.mark.parametrize("name, start, goal, mark, options", [
     # issue 21's turn between the two trees (two_ended.GoalSide._turn) on pockets#1 of the real bench's seed-1 draw
-    ("pockets", (18.675, 13.375, 0.7312609262013985), (23.025, 17.175, 2.609458811313899), "turn_searches"),
+    ("pockets", (18.675, 13.375, 0.7312609262013985), (23.025, 17.175, 2.609458811313899), "turn_searches", {}),
     # issue 21's held shot kept when it costs less than the turn-round found (depot#1 of the seed-1 draw)
-    ("depot", (11.425, 7.125, -0.14404827093188777), (4.425, 11.725, -1.7435407827295963), "held_shot_taken"),
+    ("depot", (11.425, 7.125, -0.14404827093188777), (4.425, 11.725, -1.7435407827295963), "held_shot_taken",
+     {"n_yaw_bins": SCENARIO_BINS}),
     # issue 21's fallback shot (kernels 3d), taken when no shot keeps the preferred clearance (bays#5 of seed 0)
-    ("bays", (19.625, 7.925, -2.7225669703686637), (8.525, 10.175, -0.4379459833171597), "fallback_shot_taken"),
+    ("bays", (19.625, 7.925, -2.7225669703686637), (8.525, 10.175, -0.4379459833171597), "fallback_shot_taken",
+     {"n_yaw_bins": SCENARIO_BINS}),
     # the tenth round's fallback that rolls mostly backwards (pockets#5 of the seed-1 draw) ...
-    ("pockets", (12.175, 10.225, 2.808622591618727), (19.175, 9.375, 0.5338586836303003), "fallback_shot_taken"),
+    ("pockets", (12.175, 10.225, 2.808622591618727), (19.175, 9.375, 0.5338586836303003), "fallback_shot_taken",
+     {"n_yaw_bins": SCENARIO_BINS}),
     # ... and its join of the two trees from 2 000 expansions (pockets#2 of seed 0: found from both sides)
-    ("pockets", (6.125, 10.075, 2.9092350581717223), (19.325, 14.725, 2.599295721958983), "goal_side_expansions"),
+    ("pockets", (6.125, 10.075, 2.9092350581717223), (19.325, 14.725, 2.599295721958983), "goal_side_expansions",
+     {}),
 ])
 def test_a_real_map_plan_is_the_same_at_every_door(client: httpx.Client, server: Server,
                                                      capsys: pytest.CaptureFixture[str], name: str,
                                                      start: tuple[float, float, float],
-                                                     goal: tuple[float, float, float], mark: str) -> None:
+                                                     goal: tuple[float, float, float], mark: str,
+                                                     options: dict[str, int]) -> None:
     """The same path, expansions and search counts from the CLI, HTTP and Zenoh (the map sent as a
     nav_msgs/OccupancyGrid to the service, as its YAML to the CLI), on plans that take issue 21's later branches.
-    (The problems were found with 72 heading bins, the default until issue 21's twelfth round, and keep them: the
-    option travels through every door as well.)"""
+    (Three problems were found with 72 heading bins, the default until issue 21's twelfth round, and keep them: the
+    option travels through every door as well; the other two plan with the default options.)"""
     path = REPO / "maps" / "real" / f"{name}.yaml"
     grid = load_map(path)
     origin = {"position": {"x": grid.origin[0], "y": grid.origin[1]}}
@@ -561,7 +566,7 @@ def test_a_real_map_plan_is_the_same_at_every_door(client: httpx.Client, server:
                              "origin": origin}, "data_gzip_b64": gz_b64(grid.data)},
             "start": dict(zip(("x", "y", "yaw"), start, strict=True)),
             "goal": dict(zip(("x", "y", "yaw"), goal, strict=True)), "time_limit_s": 3.0,  # the test server's bound
-            "options": {"n_yaw_bins": SCENARIO_BINS}}
+            "options": options}
     response = client.post("/v1/plan", json=body)
     assert response.status_code == 200, response.text[:300]
     reply = zenoh_reply(server, "sphereplan/plan", body)
