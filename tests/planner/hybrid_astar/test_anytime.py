@@ -29,7 +29,6 @@ from tests.service.service_harness import hall_grid
 # nothing to improve)
 START, GOAL = (2.0, 2.0, 0.0), (8.0, 2.0, 0.0)
 BUDGET_S = 20.0  # far more than the rounds need (≈ 0.2 s on an idle machine): they end by finishing
-BINS = SCENARIO_BINS
 
 
 def hall() -> OccupancyGrid:
@@ -44,13 +43,13 @@ def grid() -> OccupancyGrid:
 
 @pytest.fixture(scope="module")
 def first(grid: OccupancyGrid):
-    """The plan with the default options (improve_until_s = 0) but BINS."""
-    return HybridAStar(grid, load_robot(), PlannerOptions(n_yaw_bins=BINS)).plan(START, GOAL, Termination(60))
+    """The plan with improve_until_s = 0 (its default), at the scenario's 72 heading bins."""
+    return HybridAStar(grid, load_robot(), PlannerOptions(n_yaw_bins=SCENARIO_BINS)).plan(START, GOAL, Termination(60))
 
 
 @pytest.fixture(scope="module")
 def improved(grid: OccupancyGrid):
-    return HybridAStar(grid, load_robot(), PlannerOptions(improve_until_s=BUDGET_S, n_yaw_bins=BINS)).plan(
+    return HybridAStar(grid, load_robot(), PlannerOptions(improve_until_s=BUDGET_S, n_yaw_bins=SCENARIO_BINS)).plan(
         START, GOAL, Termination(60))
 
 
@@ -82,7 +81,7 @@ def test_the_record_starts_with_the_first_path_and_only_gets_cheaper(first, impr
 def test_the_default_changes_nothing(grid, first) -> None:
     assert PlannerOptions().improve_until_s == 0.0
     assert not {"improvements", "improvement_stop"} & set(first.extra)
-    again = HybridAStar(grid, load_robot(), PlannerOptions(improve_until_s=BUDGET_S, n_yaw_bins=BINS)).plan(
+    again = HybridAStar(grid, load_robot(), PlannerOptions(improve_until_s=BUDGET_S, n_yaw_bins=SCENARIO_BINS)).plan(
         START, GOAL, Termination(60))
     # the improved plan's first path is the default plan's path, and the default plan stops there
     assert again.extra["improvements"][0]["length_m"] == pytest.approx(first.length_m, abs=2e-3)
