@@ -52,7 +52,7 @@ from planner.errors import (
     StartOccupied,
     StartOutsideMap,
 )
-from planner.hybrid_astar import closed_set, kernels, meet
+from planner.hybrid_astar import closed_set, kernels, meet, smoothing
 from planner.hybrid_astar.anytime import MAX_IMPROVE_S, improve
 from planner.hybrid_astar.dubins import dubins_distance
 from planner.hybrid_astar.heuristics import (
@@ -252,25 +252,11 @@ def warm_up() -> float:
     kernels.take_held(run.counters, run.seg_roll, run.seg_curv, run.seg_len)  # as _held_if_cheaper and _take_kept
     kernels.take_fallback(run.counters, run.seg_roll, run.seg_curv, run.seg_len)
     dubins_distance(1.5, 1.5, 0.0, 6.5, 6.5, 0.0, robot.min_turning_radius_m)  # the forward alternative's bound
+    planner._shortcut((1.5, 1.5, 0.0), [(0.0, 0.0, 1.0), (0.0, 0.0, 1.0)], run.p, 1)  # one pass, as anytime.py runs
     meet.warm_up()
     took = time.perf_counter() - t0
     log.info("compiled the search kernels in %.2f s (once per process)", took)
     return took
-
-
-def _direction_runs(motions: list[tuple[float, float, float]]) -> list[tuple[int, list[tuple[float, float, float]]]]:
-    """Split motions into maximal stretches of one travel direction (+1 / −1); a zero-length motion (a roll
-    change on the spot) joins the stretch it is in."""
-    runs: list[tuple[int, list[tuple[float, float, float]]]] = []
-    for m in motions:
-        d = 1 if m[2] > 0 else -1 if m[2] < 0 else 0
-        if runs and (d == 0 or d == runs[-1][0]):
-            runs[-1][1].append(m)
-        elif d == 0:
-            runs.append((1, [m]))
-        else:
-            runs.append((d, [m]))
-    return runs
 
 
 def _cusps(motions: list[tuple[float, float, float]]) -> int:
@@ -283,6 +269,11 @@ def _cusps(motions: list[tuple[float, float, float]]) -> int:
             n += 1
         last = d or last
     return n
+
+
+def _as_motions(rows: np.ndarray) -> list[tuple[float, float, float]]:
+    """Motion rows (held roll, curvature, signed length) as the list of tuples the planner passes around."""
+    return [(h, c, v) for h, c, v in rows.tolist()]
 
 
 FALLBACK_WAIT = 400  # kernels 3d: expansions a shot that keeps less room than asked waits for one that keeps it
@@ -719,25 +710,22 @@ class HybridAStar:
 
     def _smooth(self, start: Pose, motions: list[tuple[float, float, float]], p: np.ndarray, o: PlannerOptions,
                 counts: np.ndarray | None = None) -> list[tuple[float, float, float]]:
-        """Shortcut passes while they shorten the path by more than a millimetre; the later passes try
-        LATER_PASS_TRIES × ``smooth_max_tries`` targets per knot. A target whose shot failed
-        from a knot just before is tried again only every SMOOTH_RECHECK_FIRST knots in the first pass (on the
-        search's motions) and every SMOOTH_RECHECK knots in the later ones (on the path subdivided to the search
-        step), see ``kernels.shortcut``. ``counts`` (int64, 4), when given,
-        is added to as ``kernels.shortcut`` says."""
+        """Shortcut passes (:meth:`_shortcut`'s) while they shorten the path by more than a millimetre; the later
+        passes run on the path subdivided to the search step and try LATER_PASS_TRIES × ``smooth_max_tries`` targets
+        per knot. A target whose shot failed from a knot just before is tried again only every SMOOTH_RECHECK_FIRST
+        knots in the first pass (on the search's motions) and every SMOOTH_RECHECK knots in the later ones, see
+        ``kernels.shortcut``. ``counts`` (int64, 4), when given, is added to as ``kernels.shortcut`` says. The passes
+        run in one compiled call (:func:`planner.hybrid_astar.smoothing.smooth_path`)."""
         if not o.smooth:
             return motions
         counts = np.zeros(4, dtype=np.int64) if counts is None else counts
-        length = self._length(start, motions)
-        for k in range(o.smooth_passes):
-            tries = max(1, round(o.smooth_max_tries * LATER_PASS_TRIES)) if k else o.smooth_max_tries
-            candidate = self._shortcut(start, self._subdivide(motions) if k else motions, p, tries,
-                                       SMOOTH_RECHECK if k else SMOOTH_RECHECK_FIRST, counts)
-            new_length = self._length(start, candidate)
-            if new_length > length - 1e-3:
-                break
-            motions, length = candidate, new_length
-        return motions
+        rows = np.array(motions, float).reshape(-1, 3)
+        later = max(1, round(o.smooth_max_tries * LATER_PASS_TRIES))
+        out = smoothing.smooth_path(
+            self.clearance.clearance, self.clearance.blocked, p, *self._footprint_arrays(), float(start[0]),
+            float(start[1]), float(start[2]), rows, o.smooth_passes, o.smooth_max_tries, later, SMOOTH_RECHECK_FIRST,
+            SMOOTH_RECHECK, self.resolved_step_m, counts, self.robot.radius_m, *self._curvature_table(rows))
+        return motions if out is rows else _as_motions(out)
 
     def _held_if_cheaper(self, start: Pose, run: _Search, smoothed: list[tuple[float, float, float]],
                          o: PlannerOptions) -> list[tuple[float, float, float]] | None:
@@ -881,72 +869,26 @@ class HybridAStar:
         self, start: Pose, motions: list[tuple[float, float, float]], p: np.ndarray, max_tries: int,
         recheck: int = 1, counts: np.ndarray | None = None,
     ) -> list[tuple[float, float, float]]:
-        """Shortcut the path with forward shots (which may also replace a manoeuvre with cusps); then, when it
-        still has cusps and rolls backwards somewhere, the whole path with reverse shots (a shorter one may replace a
-        manoeuvre in a path that rolls backwards, which the forward shots cannot: the sphere faces the other way);
-        then each stretch travelled backwards with reverse shots. The cusps left stay where they are.
-
-        Reverse shots are :meth:`_shortcut_backwards`'s. ``recheck`` and ``counts`` are ``kernels.shortcut``'s.
-        """
+        """One shortcut pass (:func:`planner.hybrid_astar.smoothing.shortcut_path`): forward shots over the whole
+        path, then reverse shots where it rolls backwards. ``recheck`` and ``counts`` are ``kernels.shortcut``'s."""
         counts = np.zeros(4, dtype=np.int64) if counts is None else counts
-        motions = self._shortcut_run(start, 0.0, motions, p, max_tries, False, recheck, counts)
-        if _cusps(motions) and any(s < 0 for _, _, s in motions):
-            motions = self._shortcut_backwards(start, 0.0, motions, p, max_tries, recheck, counts)
-        out: list[tuple[float, float, float]] = []
-        x, y, yaw = start
-        roll = 0.0
-        for direction, run in _direction_runs(motions):
-            out.extend(run if direction > 0 else
-                       self._shortcut_backwards((x, y, yaw), roll, run, p, max_tries, recheck, counts))
-            end = self._knots((x, y, yaw), run, roll)[-1]
-            x, y, yaw, roll = float(end[0]), float(end[1]), float(end[2]), float(end[3])
-        return out
+        rows = np.array(motions, float).reshape(-1, 3)
+        out = smoothing.shortcut_path(
+            self.clearance.clearance, self.clearance.blocked, p, *self._footprint_arrays(), float(start[0]),
+            float(start[1]), float(start[2]), rows, max_tries, recheck, counts, self.robot.radius_m,
+            *self._curvature_table(rows))
+        return motions if out is rows else _as_motions(out)
 
-    def _shortcut_backwards(
-        self, pose: Pose, roll: float, motions: list[tuple[float, float, float]], p: np.ndarray, max_tries: int,
-        recheck: int, counts: np.ndarray,
-    ) -> list[tuple[float, float, float]]:
-        """:meth:`_shortcut_run` with reverse shots: the motions from ``pose`` at ``roll`` are shortcut as the
-        forward ones they mirror. With the heading turned by π the sphere rolls them forwards with every roll and
-        curvature negated (eq. 1 is unchanged under (yaw, φ, κ, s) → (yaw + π, −φ, −κ, −s)) and the footprint turned
-        by π with it."""
-        mirrored = [(-h, -c, -s) for h, c, s in motions]
-        done = self._shortcut_run((pose[0], pose[1], pose[2] + math.pi), -roll, mirrored, p, max_tries, True, recheck,
-                                  counts)
-        return [(-h + 0.0, -c + 0.0, -s + 0.0) for h, c, s in done]
+    def _curvature_table(self, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The robot's curvature at every roll a knot of the smoothed ``rows`` can hold (the compiled smoother's
+        lookup for the roll model)."""
+        return smoothing.curvature_table(rows, self.robot.max_roll_rad, self.robot.roll_model.curvature)
 
     def _footprint_arrays(self, flip: bool = False) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """Covering-circle offsets (x, y) and polygon (x, y) in the robot frame; ``flip`` turns them by π, for
         a pose whose heading was turned by π (a mirrored reverse stretch)."""
         sign = -1.0 if flip else 1.0
         return (sign * self.footprint.offsets_x, sign * self.footprint.offsets_y, sign * self._px, sign * self._py)
-
-    def _shortcut_run(
-        self, start: Pose, roll: float, motions: list[tuple[float, float, float]], p: np.ndarray, max_tries: int,
-        flip: bool, recheck: int, counts: np.ndarray,
-    ) -> list[tuple[float, float, float]]:
-        """Replace runs of forward motions by shorter, collision-free rollable Dubins shots (``kernels.shortcut``);
-        ``flip`` turns the footprint by π (a mirrored reverse stretch)."""
-        knots = self._knots(start, motions, roll)
-        n = len(knots)
-        out_ij = np.zeros((n, 2), dtype=np.int64)
-        out_roll, out_curv, out_len = (np.zeros((n, kernels.MAX_SHOT_SEGS)) for _ in range(3))
-        out_n = np.zeros(n, dtype=np.int64)
-        count = kernels.shortcut(self.clearance.clearance, self.clearance.blocked, p, *self._footprint_arrays(flip),
-                                 np.ascontiguousarray(knots[:, :4]), np.ascontiguousarray(knots[:, 4]), max_tries,
-                                 recheck, out_ij, out_roll, out_curv, out_len, out_n, counts)
-        result: list[tuple[float, float, float]] = []
-        k = 0
-        for c in range(count):
-            i, j = int(out_ij[c, 0]), int(out_ij[c, 1])
-            result.extend(motions[k:i])
-            result.extend((float(out_roll[c, m]), float(out_curv[c, m]), float(out_len[c, m]))
-                          for m in range(int(out_n[c])))
-            end_roll = float(knots[j, 3])
-            result.append((end_roll, float(self.robot.roll_model.curvature(end_roll)), 0.0))
-            k = j
-        result.extend(motions[k:])
-        return result
 
     def _motions(self, run: _Search, held: bool = False) -> list[tuple[float, float, float]]:
         """The path as a list of (held roll, curvature, signed arc length) motions, ending upright: the search's

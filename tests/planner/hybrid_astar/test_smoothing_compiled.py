@@ -1,0 +1,66 @@
+"""The compiled smoother's pieces (planner/hybrid_astar/smoothing.py) against the Python they replaced, and the
+curvature it gives the roll changes it adds. (Its paths are checked by the smoothing tests through
+``HybridAStar._smooth`` / ``_shortcut``.)"""
+
+import math
+
+import numpy as np
+import pytest
+
+from planner.hybrid_astar import smoothing
+from planner.hybrid_astar.search import HybridAStar, _cusps
+from planner.kinematics import subdivide
+from planner.occupancy import OccupancyGrid
+from planner.robot import load_robot
+
+ROBOT = load_robot("zju-60")
+
+
+def _random_motions(rng: np.random.Generator, n: int) -> list[tuple[float, float, float]]:
+    rolls = rng.choice([-ROBOT.max_roll_rad, -0.1, 0.0, 0.1, ROBOT.max_roll_rad], n)
+    lengths = rng.choice([-1.0, 0.0, 1.0], n) * rng.uniform(0.0, 1.3, n)
+    return [(float(r), float(ROBOT.roll_model.curvature(float(r))), float(s)) for r, s in zip(rolls, lengths)]
+
+
+def test_subdividing_and_counting_cusps_match_the_python_versions() -> None:
+    rng = np.random.default_rng(3)
+    for n in (0, 1, 2, 7, 40):
+        for _ in range(20):
+            motions = _random_motions(rng, n)
+            rows = np.array(motions, float).reshape(-1, 3)
+            for step in (0.2, 0.35, 1.0):
+                assert smoothing.subdivide_motions(rows, step).tolist() == [list(m) for m in subdivide(motions, step)]
+            assert smoothing.cusps(rows) == _cusps(motions)
+
+
+def test_a_roll_change_added_by_a_shortcut_curves_as_the_robot_does_at_that_roll() -> None:
+    """Every shortcut ends with a motion of length 0 bringing the roll to its knot's; its curvature is the roll
+    model's (looked up, forwards and in the mirrored reverse shots), so the path stays a valid chain of motions."""
+    grid = OccupancyGrid.from_occupied(np.zeros((300, 300), dtype=bool), 0.05, name="open")
+    planner = HybridAStar(grid, ROBOT)
+    roll = ROBOT.max_roll_rad
+    kappa = float(ROBOT.roll_model.curvature(roll))
+    start = (10.0, 7.5, 0.0)
+    p = planner._params((0.0, 0.0, 0.0), True)
+    paths = {
+        "backwards with a manoeuvre": [(0.0, 0.0, -1.0), (roll, kappa, -0.6), (-roll, -kappa, 0.6), (0.0, 0.0, -1.0),
+                                       (0.0, 0.0, 0.0)],
+        "forwards zig-zag": [(roll, kappa, 0.5), (-roll, -kappa, 0.5)] * 4 + [(0.0, 0.0, 0.0)],
+        "forwards then backwards": [(roll, kappa, 0.4), (-roll, -kappa, 0.4)] * 3
+        + [(-roll, -kappa, -0.4), (roll, kappa, -0.4)] * 3 + [(0.0, 0.0, 0.0)],
+    }
+    for name, motions in paths.items():
+        out = planner._shortcut(start, motions, p, 24)
+        assert len(out) < len(motions), name  # it shortcut something
+        for held, curv, _ in [m for m in out if m[2] == 0.0]:  # the roll changes a shortcut ends with
+            assert curv == ROBOT.roll_model.curvature(held) + 0.0, name
+        for held, curv, _ in out:
+            assert curv == pytest.approx(ROBOT.roll_model.curvature(held), rel=1e-3, abs=1e-9), name
+        assert not any(math.copysign(1.0, v) < 0 and v == 0.0 for m in out for v in m), name  # no −0.0
+
+
+def test_a_roll_missing_from_the_curvature_table_is_an_error_not_a_guess() -> None:
+    keys, curvs = smoothing.curvature_table(np.array([[0.1, 0.5, 1.0]]), 0.3, ROBOT.roll_model.curvature)
+    assert sorted(keys.tolist()) == [-0.3, -0.1, 0.0, 0.1, 0.3]
+    with pytest.raises(ValueError, match="curvature table"):
+        smoothing._curvature_at(0.2, keys, curvs)
