@@ -40,15 +40,16 @@ N_COUNTERS = 15
  P_STEP, P_SPACING, P_NON_STRAIGHT, P_CHANGE, P_REVERSE, P_SWITCH, P_COST_PENALTY, P_PROX_RANGE, P_GREED,
  P_SHOT_RATIO, P_MAX_ROLL, P_USE_DUBINS, P_ALLOW_REVERSE, P_N_YAW, P_USE_RS, P_RS_CELL, P_RS_HALF,
  P_PREFERRED, P_REACH, P_BEST_H, P_REJECT, P_CLOSER_H, P_HELD_COST, P_BACK_SHARE, P_BOUND, P_LONG,
- P_GCOS, P_GSIN, P_FALL_WAIT, P_BACK_WAIT) = range(44)  # P_GCOS, P_GSIN: cos and sin of P_GYAW (for the Reeds–Shepp
-# table's frame); P_FALL_WAIT: expansions a fallback shot (3d) waits for one that keeps the room asked, 0 = no fallback
-# shots; P_BACK_WAIT: a fallback shot that rolls the path mostly backwards waits this × P_FALL_WAIT, 0 = none is kept
-N_PARAMS = 44
+ P_GCOS, P_GSIN, P_FALL_WAIT, P_BACK_WAIT, P_HOLD_WAIT) = range(45)  # P_GCOS, P_GSIN: cos and sin of P_GYAW (for the
+# Reeds–Shepp table's frame); P_FALL_WAIT: expansions a fallback shot (3d) waits for one that keeps the room asked,
+# 0 = no fallback shots; P_BACK_WAIT: a fallback shot that rolls the path mostly backwards waits this × P_FALL_WAIT,
+# 0 = none is kept; P_HOLD_WAIT: expansions a held-back shot (3c) waits for a path that rolls forwards more
+N_PARAMS = 45
 BEST_SHOT_EVERY = 256  # reversing: every this many expansions, a Reeds–Shepp shot from the closest node if new
 NEAR_TIE = 1.05  # the second / third cheapest Reeds–Shepp word is shot only within this ratio of the cheapest
 MAX_SHOT_SEGS = 6  # a Dubins shot has 3 segments, a Reeds–Shepp shot up to 5
 OPEN_MIN_H = 3.0  # long steps in the open only this far (heuristic metres) from the goal
-HOLD_EXPANSIONS = 4000  # a held-back shot waits this many expansions for a path that rolls forwards more
+HOLD_EXPANSIONS = 4000  # P_HOLD_WAIT at search.BUDGET_BINS heading bins (search.py scales it with the bins)
 LEAST_KEPT_MARGIN_M = 0.2  # a shortcut (or the search's shot) keeps at least this margin where the stretch it
 # replaces (the shot's ends) came closer than the preferred clearance; the preferred clearance when that is less
 SHORTCUT_SLACK_M = 0.2  # shortcut: a target is not shot at when the car's Dubins distance is this far over budget
@@ -930,7 +931,7 @@ def search_chunk(
                     counters[C_SHOT_SEGS] = n
                     return FOUND
                 # 3c. A shot that would make the path roll mostly backwards is held back: the search goes on for
-                #     HOLD_EXPANSIONS more expansions looking for a path that turns round,
+                #     P_HOLD_WAIT more expansions looking for a path that turns round,
                 #     and takes the cheapest held shot when it finds none (or runs dry). (When it finds one, the plan
                 #     keeps the held shot instead if that costs less: search.py, HybridAStar._plan.)
                 cost = node_f[src, 4] + _shot_cost(p, node_i[src, 2], seg_len, n)
@@ -943,7 +944,7 @@ def search_chunk(
                     counters[C_HELD_SEGS] = n
                     _copy_shot(seg_roll, seg_curv, seg_len, 0, MAX_SHOT_SEGS, n)
                     if counters[C_HELD_UNTIL] == 0:
-                        counters[C_HELD_UNTIL] = counters[C_EXPANSIONS] + HOLD_EXPANSIONS
+                        counters[C_HELD_UNTIL] = counters[C_EXPANSIONS] + int(p[P_HOLD_WAIT])
         # 4. Expand: every held roll, forward (and reverse), one exact step of eq. 1.
         #    In the open (the stored clearance of the node's cell exceeds the covering circles' reach and radius,
         #    the longest sideways shift and P_LONG steps: the circles stay clear wherever the child goes) and over

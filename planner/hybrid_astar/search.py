@@ -82,14 +82,21 @@ HEURISTIC_CACHE_SIZE = 8  # holonomic tables kept per planner (one per goal cell
 GOAL_CHECK_AFTER = 20_000  # expansions without a path before the goal's surroundings are searched (fail fast)
 GOAL_CHECK_BUDGET = 40_000  # expansions that search may take
 GOAL_CHECK_SHARE = 0.15  # ... and at most this share of the time limit
+# The budgets counted in expansions marked (×bins) were measured at BUDGET_BINS heading bins; a search at n bins
+# gets n / BUDGET_BINS of each: the step follows the bin, so the same metres of search (issue 21's thirteenth round:
+# at the default 36 bins, half the budgets of 72 took 23 % fewer expansions on the real-map problems of seeds 0–7 for
+# the same total length; halving GOAL_SIDE_AFTER and the turn searches' budgets cost more than it spared).
+BUDGET_BINS = 72
 GOAL_SIDE_AFTER = 500  # expansions without a path before the goal side's search joins in (two_ended.py)
-MEET_AFTER = 2_000  # expansions of both sides before shots try to join their trees (meet.py)
-FORWARD_RETRY_PER_M = 250  # expansions a forward-only search may take to find a cheaper path, per metre start–goal,
+MEET_AFTER = 2_000  # expansions of both sides before shots try to join their trees (meet.py) (×bins)
+FORWARD_RETRY_PER_M = 250  # expansions a forward-only search may take to find a cheaper path, per metre start–goal
+# (×bins, as are the next two),
 FORWARD_RETRY_MIN = 1_000  # ... at least this many
 FORWARD_RETRY_MAX = 20_000  # ... and at most this many (docs/planning.md: the budgets the accepted paths needed)
 FORWARD_RETRY_SHARE = 0.5  # ... tried when the path found rolls more than this share of its length backwards
 FORWARD_RETRY_TIMES = 3  # ... and at most this many × the plan's expansions before it
 FORWARD_CHECK_BUDGET = 600  # ... unless a forward-only search from the goal exhausts within this many (a dead end)
+# (×bins)
 FORWARD_CHECK_WORTH = 4  # ... a check run only when the forward search may take more than this many × its budget
 _LOOP = threading.local()  # the current thread's plan: its clock, its seconds in the compiled loop (search_loop_time_s)
 GROWTH_MARGIN = 2.5  # a search's storage grows only when this × its last growth's time still fits before the deadline
@@ -276,7 +283,7 @@ def _as_motions(rows: np.ndarray) -> list[tuple[float, float, float]]:
     return [(h, c, v) for h, c, v in rows.tolist()]
 
 
-FALLBACK_WAIT = 400  # kernels 3d: expansions a shot that keeps less room than asked waits for one that keeps it
+FALLBACK_WAIT = 400  # kernels 3d: expansions a shot that keeps less room than asked waits for one that keeps it (×bins)
 BACK_FALLBACK_WAIT = 1.5  # ... this × as many when the shot makes the path roll mostly backwards (kernels P_BACK_WAIT)
 
 
@@ -467,6 +474,16 @@ class HybridAStar:
         yaw_bin = 2 * math.pi / self.options.n_yaw_bins
         return max(math.sqrt(2) * self.grid.resolution_m, self.robot.min_turning_radius_m * yaw_bin)
 
+    @property
+    def budget_scale(self) -> float:
+        """The share of the budgets marked (×bins) this planner's searches get: n_yaw_bins / BUDGET_BINS."""
+        return self.options.n_yaw_bins / BUDGET_BINS
+
+    def budget(self, expansions: int) -> int:
+        """A budget marked (×bins), measured at BUDGET_BINS heading bins, for this planner's bins (0 stays 0, which
+        turns a wait off; any other at least 1)."""
+        return 0 if expansions == 0 else max(1, round(expansions * self.budget_scale))
+
     def chunk_expansions(self, o: PlannerOptions) -> int:
         """Expansions per compiled chunk: ``o.chunk_expansions``, fewer when each expansion samples many points
         (a long ``step_m``), so the clock is polled after at most ``CHUNK_SAMPLES`` collision samples."""
@@ -502,6 +519,7 @@ class HybridAStar:
         p[kernels.P_REJECT] = inscribed_radius(self.polygon) - (math.sqrt(2.0) + math.sqrt(0.5)) * res - 1e-6
         p[kernels.P_GREED], p[kernels.P_SHOT_RATIO] = o.greed, o.analytic_ratio_m
         p[kernels.P_MAX_ROLL] = self.robot.max_roll_rad
+        p[kernels.P_HOLD_WAIT] = self.budget(kernels.HOLD_EXPANSIONS)
         p[kernels.P_USE_DUBINS] = 0.0 if reverse else 1.0
         p[kernels.P_USE_RS] = 1.0 if reverse else 0.0
         p[kernels.P_RS_CELL] = RS_CELL_M
@@ -556,7 +574,7 @@ class HybridAStar:
                 planning_time_s=time.perf_counter() - t0,
             )
         run = _Search(self, start, goal, heur, o, self.reverse)
-        run.p[kernels.P_FALL_WAIT] = FALLBACK_WAIT
+        run.p[kernels.P_FALL_WAIT] = self.budget(FALLBACK_WAIT)
         run.p[kernels.P_BACK_WAIT] = BACK_FALLBACK_WAIT
         side = self._drive(run, start, goal, o, clock)
         goal_path = None if side is None else side.motions
@@ -674,7 +692,8 @@ class HybridAStar:
                 checked_goal = True  # the goal side's search is the dead-end check (5b) as well
                 side = GoalSide(self, start, goal, o, _Search)
             if side is not None and (side.step(min(self.chunk_expansions(o), cap - side.expansions))
-                                     or (run.expansions + side.expansions >= MEET_AFTER and side.meet(run, clock))):
+                                     or (run.expansions + side.expansions >= self.budget(MEET_AFTER)
+                                         and side.meet(run, clock))):
                 if side.motions is not None:
                     return side
                 raise NoValidPathFound(
@@ -779,9 +798,10 @@ class HybridAStar:
         cost = self._travel_cost(start, motions, o)
         if dubins_distance(*start, *goal, self.robot.min_turning_radius_m) >= cost:
             return None, None
-        cap = self.forward_budget(start, goal, spent)
-        if cap > FORWARD_CHECK_WORTH * FORWARD_CHECK_BUDGET and self.goal_side_ok and self._reverse_search(
-                start, goal, o, clock, reverse=False, budget=FORWARD_CHECK_BUDGET, spent=checked) is not None:
+        cap = self.forward_budget(start, goal, spent, self.budget_scale)
+        check = self.budget(FORWARD_CHECK_BUDGET)
+        if cap > FORWARD_CHECK_WORTH * check and self.goal_side_ok and self._reverse_search(
+                start, goal, o, clock, reverse=False, budget=check, spent=checked) is not None:
             return None, None  # the goal cannot be approached rolling forwards: no forward path exists
         run = _Search(self, start, goal, heur, o, False)
         run.p[kernels.P_BOUND] = bound
@@ -795,10 +815,11 @@ class HybridAStar:
         return run, (forward if self._travel_cost(start, forward, o) < cost else None)
 
     @staticmethod
-    def forward_budget(start: Pose, goal: Pose, spent: int = 0) -> int:
+    def forward_budget(start: Pose, goal: Pose, spent: int = 0, scale: float = 1.0) -> int:
         """Expansions the forward-only alternative search may take: FORWARD_RETRY_PER_M per metre of the straight
-        start–goal distance, at least FORWARD_RETRY_MIN and at most FORWARD_RETRY_MAX; and at most
-        FORWARD_RETRY_TIMES × ``spent`` (the expansions the plan made before it, when given), below that floor too.
+        start–goal distance, at least FORWARD_RETRY_MIN and at most FORWARD_RETRY_MAX, all × ``scale`` (the plan's
+        :attr:`budget_scale`); and at most FORWARD_RETRY_TIMES × ``spent`` (the expansions the plan made before it,
+        when given), below that floor too.
 
         Measured on 480 real-map problems (seeds 0–7 of the real bench): the 17 forward paths accepted took 7–371
         expansions per metre (one above 240), on the open 4-million-cell field mostly; in the bays, pockets and
@@ -808,7 +829,7 @@ class HybridAStar:
         forward search stuck before a gap the holonomic heuristic passes and the footprint does not).
         """
         d = math.hypot(goal[0] - start[0], goal[1] - start[1])
-        cap = min(float(FORWARD_RETRY_MAX), max(float(FORWARD_RETRY_MIN), FORWARD_RETRY_PER_M * d))
+        cap = scale * min(float(FORWARD_RETRY_MAX), max(float(FORWARD_RETRY_MIN), FORWARD_RETRY_PER_M * d))
         if spent:
             cap = min(cap, FORWARD_RETRY_TIMES * spent)
         return int(cap)

@@ -6,7 +6,7 @@ import math
 import numpy as np
 import pytest
 
-from planner.hybrid_astar import kernels
+from planner.hybrid_astar import kernels, search
 from planner.hybrid_astar.dubins import dubins_distance
 from planner.hybrid_astar.reeds_shepp import (
     MAX_SEGS,
@@ -162,8 +162,10 @@ def test_a_mostly_backwards_shot_is_held_back_while_the_search_goes_on() -> None
     start, goal = (12.0, 0.75, 0.0), (4.0, 0.75, 0.0)
     run = _Search(planner, start, goal, planner.holonomic(goal[:2], start[:2]), planner.options, True)
     assert run.step(100_000) == kernels.FOUND
-    assert run.counters[kernels.C_HELD_UNTIL] == 1 + kernels.HOLD_EXPANSIONS  # held at the first expansion
-    assert run.counters[kernels.C_SHOT_SEGS] == 0 and run.expansions < kernels.HOLD_EXPANSIONS
+    wait = planner.budget(kernels.HOLD_EXPANSIONS)  # the wait scales with the heading bins (search.BUDGET_BINS)
+    assert wait == kernels.HOLD_EXPANSIONS * planner.options.n_yaw_bins // search.BUDGET_BINS
+    assert run.counters[kernels.C_HELD_UNTIL] == 1 + wait  # held at the first expansion
+    assert run.counters[kernels.C_SHOT_SEGS] == 0 and run.expansions < wait
 
 
 def test_the_held_back_shot_is_the_path_when_the_search_runs_out() -> None:
@@ -400,7 +402,6 @@ def test_a_shot_that_keeps_less_room_than_asked_is_the_path_when_no_better_comes
     """kernels 3d: the first free shot that keeps less than the preferred clearance is kept, and taken when the
     search finds no shot that keeps it within FALLBACK_WAIT expansions; without the fallback the search goes on for
     thousands of expansions and its path comes as close to the walls."""
-    from planner.hybrid_astar import search
 
     grid = load_map("maps/real/bays.yaml")
     start, goal = BAYS5
@@ -416,7 +417,6 @@ def test_a_shot_that_keeps_less_room_than_asked_is_the_path_when_no_better_comes
 
 
 def test_a_shot_that_keeps_the_room_asked_replaces_the_fallback_while_it_waits(monkeypatch) -> None:
-    from planner.hybrid_astar import search
 
     grid = load_map("maps/real/warehouse.yaml")
     start, goal = WH1
@@ -434,7 +434,6 @@ def test_the_fallback_shot_is_the_path_when_the_search_runs_out(monkeypatch) -> 
     """Out of expansions while a fallback shot is kept: it is the path (as a held-back shot is), not a failure. (The
     goal side's search, which would find a path of its own here, is left out.)"""
     from planner.errors import NoValidPathFound
-    from planner.hybrid_astar import search
 
     grid = load_map("maps/real/bays.yaml")
     start, goal = BAYS5
@@ -462,7 +461,6 @@ def test_a_shot_backwards_that_keeps_less_room_than_asked_is_a_fallback_too(monk
     mostly backwards is kept as well, waiting BACK_FALLBACK_WAIT × FALLBACK_WAIT expansions (the plan's forward
     alternative then looks for a path that turns round, as after a held shot). Before, it was dropped: the search
     went on until the goal side found a 9.71 m manoeuvre at 3 901 expansions, about as close to the walls."""
-    from planner.hybrid_astar import search
 
     grid = load_map("maps/real/pockets.yaml")
     start, goal = POCKETS5

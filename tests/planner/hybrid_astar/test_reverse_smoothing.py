@@ -185,6 +185,26 @@ def test_the_forward_search_gets_a_budget_by_distance() -> None:
     assert 0 < result.extra["forward_alternative_expansions"] <= FORWARD_RETRY_MIN
 
 
+@pytest.mark.parametrize("bins", [36, 72])
+def test_the_expansion_budgets_follow_the_heading_bins(bins) -> None:
+    """The budgets counted in expansions were measured at search.BUDGET_BINS (72) heading bins; the step follows the
+    bin, so a search at 36 bins, whose expansions roll twice as far, gets half of each (issue 21's thirteenth round):
+    the same metres of search. smoothers_world#8 of seed 0 (above) runs its forward alternative to the budget."""
+    from planner.hybrid_astar import kernels
+    from planner.hybrid_astar.search import BUDGET_BINS, FALLBACK_WAIT, FORWARD_RETRY_MIN
+
+    grid = load_map("maps/real/smoothers_world.yaml")
+    start, goal = (9.275, 5.325, -0.9024881717968012), (7.875, 2.025, -1.7184486953680036)
+    planner = HybridAStar(grid, ROBOT, PlannerOptions(n_yaw_bins=bins))
+    share = bins / BUDGET_BINS
+    assert planner.budget(FALLBACK_WAIT) == FALLBACK_WAIT * share and planner.budget(0) == 0
+    assert planner._params(goal, True)[kernels.P_HOLD_WAIT] == kernels.HOLD_EXPANSIONS * share
+    assert HybridAStar.forward_budget(start, goal, 0, planner.budget_scale) == FORWARD_RETRY_MIN * share
+    result = planner.plan(start, goal)
+    assert check_path(grid, ROBOT, result.states, start, goal) == []
+    assert result.extra["forward_alternative_expansions"] == FORWARD_RETRY_MIN * share
+
+
 def test_a_plan_found_quickly_spends_little_on_the_forward_alternative() -> None:
     """depot#1 of the real-map bench's seed 0: the search holds back a shot that rolls mostly backwards and takes it
     after 57 expansions. The forward-only alternative then gets 3 × those (171), not the floor of 1 000 that found

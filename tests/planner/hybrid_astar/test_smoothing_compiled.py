@@ -19,7 +19,8 @@ ROBOT = load_robot("zju-60")
 def _random_motions(rng: np.random.Generator, n: int) -> list[tuple[float, float, float]]:
     rolls = rng.choice([-ROBOT.max_roll_rad, -0.1, 0.0, 0.1, ROBOT.max_roll_rad], n)
     lengths = rng.choice([-1.0, 0.0, 1.0], n) * rng.uniform(0.0, 1.3, n)
-    return [(float(r), float(ROBOT.roll_model.curvature(float(r))), float(s)) for r, s in zip(rolls, lengths)]
+    return [(float(r), float(ROBOT.roll_model.curvature(float(r))), float(s))
+            for r, s in zip(rolls, lengths, strict=True)]
 
 
 def test_subdividing_and_counting_cusps_match_the_python_versions() -> None:
