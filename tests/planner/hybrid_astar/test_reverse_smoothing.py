@@ -191,13 +191,13 @@ def test_the_expansion_budgets_follow_the_heading_bins(bins) -> None:
     bin, so a search at 36 bins, whose expansions roll twice as far, gets half of each (issue 21's thirteenth round):
     the same metres of search. smoothers_world#8 of seed 0 (above) runs its forward alternative to the budget."""
     from planner.hybrid_astar import kernels
-    from planner.hybrid_astar.search import BUDGET_BINS, FALLBACK_WAIT, FORWARD_RETRY_MIN
+    from planner.hybrid_astar.search import BUDGET_BINS, FORWARD_RETRY_MIN, MEET_AFTER
 
     grid = load_map("maps/real/smoothers_world.yaml")
     start, goal = (9.275, 5.325, -0.9024881717968012), (7.875, 2.025, -1.7184486953680036)
     planner = HybridAStar(grid, ROBOT, PlannerOptions(n_yaw_bins=bins))
     share = bins / BUDGET_BINS
-    assert planner.budget(FALLBACK_WAIT) == FALLBACK_WAIT * share and planner.budget(0) == 0
+    assert planner.budget(MEET_AFTER) == MEET_AFTER * share and planner.budget(0) == 0
     assert planner._params(goal, True)[kernels.P_HOLD_WAIT] == kernels.HOLD_EXPANSIONS * share
     assert HybridAStar.forward_budget(start, goal, 0, planner.budget_scale) == FORWARD_RETRY_MIN * share
     result = planner.plan(start, goal)

@@ -17,7 +17,6 @@ from planner.occupancy import OccupancyGrid
 from planner.robot import load_robot
 from planner.termination import Termination
 from tests.pathcheck import check_path, footprint_hits
-from tests.scenarios import SCENARIO_BINS  # scenarios found with 72 heading bins keep them
 
 ROBOT = load_robot("zju-60")
 
@@ -134,11 +133,10 @@ def test_the_goal_side_joins_early_where_the_start_side_stalls_at_the_goal():
     # warehouse#9 of the real-map bench (seed 0): the start side reaches the goal's surroundings at once, facing the
     # wrong way between a rack's end and a box, and floods them; the goal side finds the path in under 100
     # expansions. With the goal side joining after 2 000 expansions (chunks of 2 000) the plan took 3 880 in all.
-    # (Found at 72 heading bins: at 36 the start side's fallback shot, waiting half as long, is taken first.)
     grid = load_map("maps/real/warehouse.yaml")
     start = (-5.605, -2.275, -1.4003907527669615)
     goal = (-3.775, 10.655, 0.48322497323790925)
-    planner = HybridAStar(grid, ROBOT, PlannerOptions(n_yaw_bins=SCENARIO_BINS))
+    planner = HybridAStar(grid, ROBOT)
     result = planner.plan(start, goal, Termination(time_limit_s=60.0))
     assert result.extra["found_from"] == "goal"
     assert result.expansions < 1500
