@@ -8,7 +8,7 @@ about a millisecond a plan, a third of the smoothing time on the quick real-map 
 its decisions are unchanged (the paths are the same, bit for bit, on the real-map problems).
 
 Motions are rows (held roll, curvature, signed arc length). A shortcut ends with a motion of length 0 that brings
-the roll to the knot's: its curvature is the robot's at that roll, looked up in ``roll_keys`` / ``roll_curvs``
+the roll to the knot's: its curvature is the robot's at that roll, looked up in ``keys`` / ``curvs``
 (:func:`curvature_table`; the roll model itself is Python).
 """
 
@@ -36,6 +36,7 @@ def curvature_table(motions: np.ndarray, max_roll: float, curvature: Callable[[f
 
 @njit(cache=True)
 def _curvature_at(roll: float, keys: np.ndarray, curvs: np.ndarray) -> float:
+    """The curvature at ``roll`` from :func:`curvature_table`'s arrays (an error when the roll is not there)."""
     for k in range(keys.size):
         if keys[k] == roll:
             return curvs[k]
