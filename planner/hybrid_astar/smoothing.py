@@ -25,13 +25,14 @@ from planner.hybrid_astar.kernels import MAX_SHOT_SEGS, shortcut
 from planner.kinematics import motion_knots
 
 
-def curvature_table(motions: np.ndarray, max_roll: float, curvature: Callable[[float], Any]
+def curvature_table(motions: np.ndarray, max_roll: float, curvature: Callable[[np.ndarray], Any]
                     ) -> tuple[np.ndarray, np.ndarray]:
     """Every roll a knot of the smoothed path can hold (the motions' held rolls, mirrored, and the shots' −max,
-    0, +max) and the robot's curvature there (``curvature``, the roll model's), as two arrays."""
+    0, +max) and the robot's curvature there (``curvature``, the roll model's, called once on all of them), as two
+    arrays."""
     held = np.asarray(motions, float).reshape(-1, 3)[:, 0]
     keys = np.unique(np.concatenate((held, -held, [0.0, max_roll, -max_roll])))
-    return keys, np.array([float(curvature(float(k))) for k in keys])
+    return keys, np.asarray(curvature(keys), dtype=float).reshape(keys.shape)
 
 
 @njit(cache=True)
