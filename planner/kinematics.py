@@ -133,9 +133,25 @@ def wrap(a: float) -> float:
 
 def subdivide(motions: list[tuple[float, float, float]], step: float) -> list[tuple[float, float, float]]:
     """Split motions (held roll, curvature, signed length) longer than ``step`` into equal pieces: the same path,
-    more knots to shortcut from."""
-    out: list[tuple[float, float, float]] = []
-    for held, curv, s in motions:
-        n = max(1, math.ceil(abs(s) / step - 1e-9))
-        out.extend([(held, curv, s / n)] * n)
+    more knots to shortcut from (:func:`subdivide_rows` on a list)."""
+    rows = subdivide_rows(np.array(motions, float).reshape(-1, 3), step)
+    return [(h, c, s) for h, c, s in rows.tolist()]
+
+
+@njit(cache=True)
+def subdivide_rows(motions: np.ndarray, step: float) -> np.ndarray:
+    """:func:`subdivide` on rows (n, 3), compiled (the smoother's later passes call it from compiled code)."""
+    parts = np.empty(motions.shape[0], dtype=np.int64)
+    total = 0
+    for k in range(motions.shape[0]):
+        parts[k] = max(1, math.ceil(abs(motions[k, 2]) / step - 1e-9))
+        total += parts[k]
+    out = np.empty((total, 3))
+    n = 0
+    for k in range(motions.shape[0]):
+        for _ in range(parts[k]):
+            out[n, 0] = motions[k, 0]
+            out[n, 1] = motions[k, 1]
+            out[n, 2] = motions[k, 2] / parts[k]
+            n += 1
     return out

@@ -49,7 +49,6 @@ BEST_SHOT_EVERY = 256  # reversing: every this many expansions, a Reeds–Shepp 
 NEAR_TIE = 1.05  # the second / third cheapest Reeds–Shepp word is shot only within this ratio of the cheapest
 MAX_SHOT_SEGS = 6  # a Dubins shot has 3 segments, a Reeds–Shepp shot up to 5
 OPEN_MIN_H = 3.0  # long steps in the open only this far (heuristic metres) from the goal
-HOLD_EXPANSIONS = 4000  # P_HOLD_WAIT at search.BUDGET_BINS heading bins (search.py scales it with the bins)
 LEAST_KEPT_MARGIN_M = 0.2  # a shortcut (or the search's shot) keeps at least this margin where the stretch it
 # replaces (the shot's ends) came closer than the preferred clearance; the preferred clearance when that is less
 SHORTCUT_SLACK_M = 0.2  # shortcut: a target is not shot at when the car's Dubins distance is this far over budget

@@ -90,6 +90,8 @@ GOAL_CHECK_SHARE = 0.15  # ... and at most this share of the time limit
 BUDGET_BINS = 72
 GOAL_SIDE_AFTER = 500  # expansions without a path before the goal side's search joins in (two_ended.py)
 MEET_AFTER = 2_000  # expansions of both sides before shots try to join their trees (meet.py) (×bins)
+HOLD_EXPANSIONS = 4_000  # a held-back shot (kernels 3c, P_HOLD_WAIT) waits this many for a path that rolls forwards
+# more (×bins)
 FORWARD_RETRY_PER_M = 250  # expansions a forward-only search may take to find a cheaper path, per metre start–goal
 # (×bins, as are the next two),
 FORWARD_RETRY_MIN = 1_000  # ... at least this many
@@ -260,7 +262,10 @@ def warm_up() -> float:
     kernels.take_held(run.counters, run.seg_roll, run.seg_curv, run.seg_len)  # as _held_if_cheaper and _take_kept
     kernels.take_fallback(run.counters, run.seg_roll, run.seg_curv, run.seg_len)
     dubins_distance(1.5, 1.5, 0.0, 6.5, 6.5, 0.0, robot.min_turning_radius_m)  # the forward alternative's bound
-    planner._shortcut((1.5, 1.5, 0.0), [(0.0, 0.0, 1.0), (0.0, 0.0, 1.0)], run.p, 1)  # one pass, as anytime.py runs
+    motions = [(0.0, 0.0, 1.0), (0.0, 0.0, 1.0)]
+    planner._shortcut((1.5, 1.5, 0.0), motions, run.p, 1)  # one pass, as anytime.py runs
+    planner._knots((1.5, 1.5, 0.0), planner._subdivide(motions))  # anytime.py and the joins' checks, from Python
+    _cusps(motions)  # _travel_cost's, from Python
     meet.warm_up()
     took = time.perf_counter() - t0
     log.info("compiled the search kernels in %.2f s (once per process)", took)
@@ -268,15 +273,8 @@ def warm_up() -> float:
 
 
 def _cusps(motions: list[tuple[float, float, float]]) -> int:
-    """Changes of travel direction along the motions."""
-    n = 0
-    last = 0
-    for _, _, s in motions:
-        d = 1 if s > 0 else -1 if s < 0 else 0
-        if d and last and d != last:
-            n += 1
-        last = d or last
-    return n
+    """Changes of travel direction along the motions (:func:`planner.hybrid_astar.smoothing.cusps`)."""
+    return smoothing.cusps(np.array(motions, float).reshape(-1, 3))
 
 
 def _as_motions(rows: np.ndarray) -> list[tuple[float, float, float]]:
@@ -520,7 +518,7 @@ class HybridAStar:
         p[kernels.P_REJECT] = inscribed_radius(self.polygon) - (math.sqrt(2.0) + math.sqrt(0.5)) * res - 1e-6
         p[kernels.P_GREED], p[kernels.P_SHOT_RATIO] = o.greed, o.analytic_ratio_m
         p[kernels.P_MAX_ROLL] = self.robot.max_roll_rad
-        p[kernels.P_HOLD_WAIT] = self.budget(kernels.HOLD_EXPANSIONS)
+        p[kernels.P_HOLD_WAIT] = self.budget(HOLD_EXPANSIONS)
         p[kernels.P_USE_DUBINS] = 0.0 if reverse else 1.0
         p[kernels.P_USE_RS] = 1.0 if reverse else 0.0
         p[kernels.P_RS_CELL] = RS_CELL_M
@@ -885,7 +883,8 @@ class HybridAStar:
         return subdivide(motions, self.resolved_step_m)
 
     def _length(self, start: Pose, motions: list[tuple[float, float, float]]) -> float:
-        return float(self._knots(start, motions)[-1, 4])
+        return float(smoothing.path_length(float(start[0]), float(start[1]), float(start[2]),
+                                           np.array(motions, float).reshape(-1, 3), self.robot.radius_m))
 
     def _shortcut(
         self, start: Pose, motions: list[tuple[float, float, float]], p: np.ndarray, max_tries: int,
@@ -906,11 +905,10 @@ class HybridAStar:
         lookup for the roll model)."""
         return smoothing.curvature_table(rows, self.robot.max_roll_rad, self.robot.roll_model.curvature)
 
-    def _footprint_arrays(self, flip: bool = False) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        """Covering-circle offsets (x, y) and polygon (x, y) in the robot frame; ``flip`` turns them by π, for
-        a pose whose heading was turned by π (a mirrored reverse stretch)."""
-        sign = -1.0 if flip else 1.0
-        return (sign * self.footprint.offsets_x, sign * self.footprint.offsets_y, sign * self._px, sign * self._py)
+    def _footprint_arrays(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """Covering-circle offsets (x, y) and polygon (x, y) in the robot frame (the smoother turns them by π for a
+        mirrored reverse stretch: :func:`planner.hybrid_astar.smoothing.turned_round`)."""
+        return self.footprint.offsets_x, self.footprint.offsets_y, self._px, self._py
 
     def _motions(self, run: _Search, held: bool = False) -> list[tuple[float, float, float]]:
         """The path as a list of (held roll, curvature, signed arc length) motions, ending upright: the search's

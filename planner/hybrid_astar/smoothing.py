@@ -22,7 +22,7 @@ import numpy as np
 from numba import njit
 
 from planner.hybrid_astar.kernels import MAX_SHOT_SEGS, shortcut
-from planner.kinematics import motion_knots
+from planner.kinematics import motion_knots, subdivide_rows
 
 
 def curvature_table(motions: np.ndarray, max_roll: float, curvature: Callable[[np.ndarray], Any]
@@ -48,25 +48,6 @@ def _curvature_at(roll: float, keys: np.ndarray, curvs: np.ndarray) -> float:
 def path_length(x: float, y: float, yaw: float, motions: np.ndarray, radius: float) -> float:
     """Distance the centre travels along the motions from (x, y, yaw) upright (arcs and roll changes' shifts)."""
     return motion_knots(x, y, yaw, 0.0, motions, radius)[-1, 4]
-
-
-@njit(cache=True)
-def subdivide_motions(motions: np.ndarray, step: float) -> np.ndarray:
-    """:func:`planner.kinematics.subdivide` on rows: motions longer than ``step`` split into equal pieces."""
-    parts = np.empty(motions.shape[0], dtype=np.int64)
-    total = 0
-    for k in range(motions.shape[0]):
-        parts[k] = max(1, math.ceil(abs(motions[k, 2]) / step - 1e-9))
-        total += parts[k]
-    out = np.empty((total, 3))
-    n = 0
-    for k in range(motions.shape[0]):
-        for _ in range(parts[k]):
-            out[n, 0] = motions[k, 0]
-            out[n, 1] = motions[k, 1]
-            out[n, 2] = motions[k, 2] / parts[k]
-            n += 1
-    return out
 
 
 @njit(cache=True)
@@ -126,6 +107,14 @@ def _run(clear: np.ndarray, blocked: np.ndarray, p: np.ndarray, offx: np.ndarray
 
 
 @njit(cache=True)
+def turned_round(offx: np.ndarray, offy: np.ndarray, px: np.ndarray, py: np.ndarray
+                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The footprint's covering-circle offsets and polygon turned by π (for a pose whose heading was turned by π:
+    a mirrored reverse stretch)."""
+    return -offx, -offy, -px, -py
+
+
+@njit(cache=True)
 def _run_backwards(clear: np.ndarray, blocked: np.ndarray, p: np.ndarray, offx: np.ndarray, offy: np.ndarray,
                    px: np.ndarray, py: np.ndarray, x: float, y: float, yaw: float, roll: float, motions: np.ndarray,
                    max_tries: int, recheck: int, counts: np.ndarray, radius: float, keys: np.ndarray,
@@ -133,8 +122,9 @@ def _run_backwards(clear: np.ndarray, blocked: np.ndarray, p: np.ndarray, offx: 
     """:func:`_run` with reverse shots: the motions are shortcut as the forward ones they mirror. With the heading
     turned by π the sphere rolls them forwards with every roll and curvature negated (eq. 1 is unchanged under
     (yaw, φ, κ, s) → (yaw + π, −φ, −κ, −s)) and the footprint (``offx`` … ``py`` as given, unturned) turned by π."""
-    done = _run(clear, blocked, p, -offx, -offy, -px, -py, x, y, yaw + math.pi, -roll, -motions, max_tries, recheck,
-                counts, radius, keys, curvs)
+    tx, ty, tpx, tpy = turned_round(offx, offy, px, py)
+    done = _run(clear, blocked, p, tx, ty, tpx, tpy, x, y, yaw + math.pi, -roll, -motions, max_tries, recheck, counts,
+                radius, keys, curvs)
     return -done + 0.0  # + 0.0: no negative zeros
 
 
@@ -202,7 +192,7 @@ def smooth_path(clear: np.ndarray, blocked: np.ndarray, p: np.ndarray, offx: np.
     for k in range(passes):
         later = k > 0
         candidate = shortcut_path(clear, blocked, p, offx, offy, px, py, x, y, yaw,
-                                  subdivide_motions(motions, step) if later else motions,
+                                  subdivide_rows(motions, step) if later else motions,
                                   later_tries if later else first_tries, later_recheck if later else first_recheck,
                                   counts, radius, keys, curvs)
         new_length = path_length(x, y, yaw, candidate, radius)

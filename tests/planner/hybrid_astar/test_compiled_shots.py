@@ -162,8 +162,8 @@ def test_a_mostly_backwards_shot_is_held_back_while_the_search_goes_on() -> None
     start, goal = (12.0, 0.75, 0.0), (4.0, 0.75, 0.0)
     run = _Search(planner, start, goal, planner.holonomic(goal[:2], start[:2]), planner.options, True)
     assert run.step(100_000) == kernels.FOUND
-    wait = planner.budget(kernels.HOLD_EXPANSIONS)  # the wait scales with the heading bins (search.BUDGET_BINS)
-    assert wait == kernels.HOLD_EXPANSIONS * planner.options.n_yaw_bins // search.BUDGET_BINS
+    wait = planner.budget(search.HOLD_EXPANSIONS)  # the wait scales with the heading bins (search.BUDGET_BINS)
+    assert wait == search.HOLD_EXPANSIONS * planner.options.n_yaw_bins // search.BUDGET_BINS
     assert run.counters[kernels.C_HELD_UNTIL] == 1 + wait  # held at the first expansion
     assert run.counters[kernels.C_SHOT_SEGS] == 0 and run.expansions < wait
 

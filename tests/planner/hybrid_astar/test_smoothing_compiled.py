@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from planner.hybrid_astar import smoothing
-from planner.hybrid_astar.search import HybridAStar, _cusps
+from planner.hybrid_astar.search import HybridAStar
 from planner.kinematics import subdivide
 from planner.occupancy import OccupancyGrid
 from planner.robot import load_robot
@@ -23,15 +23,38 @@ def _random_motions(rng: np.random.Generator, n: int) -> list[tuple[float, float
             for r, s in zip(rolls, lengths, strict=True)]
 
 
-def test_subdividing_and_counting_cusps_match_the_python_versions() -> None:
+def test_subdividing_splits_each_motion_into_equal_pieces_no_longer_than_the_step() -> None:
     rng = np.random.default_rng(3)
     for n in (0, 1, 2, 7, 40):
         for _ in range(20):
             motions = _random_motions(rng, n)
-            rows = np.array(motions, float).reshape(-1, 3)
             for step in (0.2, 0.35, 1.0):
-                assert smoothing.subdivide_motions(rows, step).tolist() == [list(m) for m in subdivide(motions, step)]
-            assert smoothing.cusps(rows) == _cusps(motions)
+                pieces = subdivide(motions, step)
+                k = 0
+                for held, curv, s in motions:  # each motion: the fewest equal pieces within the step, in order
+                    parts = max(1, math.ceil(abs(s) / step - 1e-9))
+                    assert pieces[k:k + parts] == [(held, curv, s / parts)] * parts
+                    assert abs(s / parts) <= step + 1e-9
+                    k += parts
+                assert k == len(pieces)
+
+
+def _rows(lengths) -> np.ndarray:
+    return np.array([(0.0, 0.0, s) for s in lengths], float).reshape(-1, 3)
+
+
+def test_cusps_count_the_changes_of_direction() -> None:
+    rows = _rows
+    assert smoothing.cusps(rows([])) == 0
+    assert smoothing.cusps(rows([1.0, 0.5, 0.0, 2.0])) == 0
+    assert smoothing.cusps(rows([1.0, -0.5])) == 1
+    assert smoothing.cusps(rows([1.0, 0.0, -0.5, 0.0, 0.0, 0.3, 0.2, -1.0])) == 3  # a roll change keeps the direction
+    assert smoothing.cusps(rows([0.0, -1.0, 0.0, -2.0, 1.0])) == 1
+    rng = np.random.default_rng(5)
+    for _ in range(200):  # against a count of sign changes among the motions that move
+        lengths = rng.choice([-1.0, 0.0, 1.0], int(rng.integers(0, 30)))
+        moving = np.sign(lengths[lengths != 0])
+        assert smoothing.cusps(rows(lengths)) == int((np.diff(moving) != 0).sum())
 
 
 def test_a_roll_change_added_by_a_shortcut_curves_as_the_robot_does_at_that_roll() -> None:
