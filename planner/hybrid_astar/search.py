@@ -526,6 +526,12 @@ class HybridAStar:
         p[kernels.P_ALLOW_REVERSE] = 1.0 if reverse else 0.0
         p[kernels.P_N_YAW] = o.n_yaw_bins
         p[kernels.P_LONG] = float(o.open_step_factor)
+        # the held turns gentler than the sharpest, gentlest first: a shortcut may be rolled with one (kernels._gentler)
+        gentle = list(range(len(self.rolls) // 2 + 1, len(self.rolls) - 1))[-kernels.MAX_GENTLE:]
+        p[kernels.P_GENTLE_N] = len(gentle)
+        for g, k in enumerate(gentle):
+            p[kernels.P_GENTLE + 2 * g] = 1.0 / self.curvatures[k]
+            p[kernels.P_GENTLE + 2 * g + 1] = self.rolls[k]
         return p
 
     def _check_endpoint(self, pose: Pose, which: str) -> None:
@@ -903,7 +909,7 @@ class HybridAStar:
     def _curvature_table(self, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """The robot's curvature at every roll a knot of the smoothed ``rows`` can hold (the compiled smoother's
         lookup for the roll model)."""
-        return smoothing.curvature_table(rows, self.robot.max_roll_rad, self.robot.roll_model.curvature)
+        return smoothing.curvature_table(rows, self.rolls, self.robot.roll_model.curvature)
 
     def _footprint_arrays(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """Covering-circle offsets (x, y) and polygon (x, y) in the robot frame (the smoother turns them by π for a

@@ -25,13 +25,14 @@ from planner.hybrid_astar.kernels import MAX_SHOT_SEGS, shortcut
 from planner.kinematics import motion_knots, subdivide_rows
 
 
-def curvature_table(motions: np.ndarray, max_roll: float, curvature: Callable[[np.ndarray], Any]
+def curvature_table(motions: np.ndarray, rolls: Any, curvature: Callable[[np.ndarray], Any]
                     ) -> tuple[np.ndarray, np.ndarray]:
-    """Every roll a knot of the smoothed path can hold (the motions' held rolls, mirrored, and the shots' −max,
-    0, +max) and the robot's curvature there (``curvature``, the roll model's, called once on all of them), as two
-    arrays."""
+    """Every roll a knot of the smoothed path can hold (the motions' held rolls, mirrored, upright, and the rolls
+    ``rolls`` a shot may turn with, both signs) and the robot's curvature there (``curvature``, the roll model's,
+    called once on all of them), as two arrays."""
     held = np.asarray(motions, float).reshape(-1, 3)[:, 0]
-    keys = np.unique(np.concatenate((held, -held, [0.0, max_roll, -max_roll])))
+    rolls = np.asarray(rolls, float).ravel()
+    keys = np.unique(np.concatenate((held, -held, [0.0], rolls, -rolls)))
     return keys, np.asarray(curvature(keys), dtype=float).reshape(keys.shape)
 
 

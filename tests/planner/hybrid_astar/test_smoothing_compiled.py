@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from planner.hybrid_astar import smoothing
+from planner.hybrid_astar import kernels, smoothing
 from planner.hybrid_astar.search import HybridAStar
 from planner.kinematics import subdivide
 from planner.occupancy import OccupancyGrid
@@ -75,7 +75,8 @@ def test_a_roll_change_added_by_a_shortcut_curves_as_the_robot_does_at_that_roll
     }
     for name, motions in paths.items():
         out = planner._shortcut(start, motions, p, 24)
-        assert len(out) < len(motions), name  # it shortcut something
+        assert smoothing.path_length(*start, np.array(out, float), ROBOT.radius_m) < smoothing.path_length(
+            *start, np.array(motions, float), ROBOT.radius_m) - 0.1, name  # it shortcut something
         for held, curv, _ in [m for m in out if m[2] == 0.0]:  # the roll changes a shortcut ends with
             assert curv == ROBOT.roll_model.curvature(held) + 0.0, name
         for held, curv, _ in out:
@@ -84,7 +85,46 @@ def test_a_roll_change_added_by_a_shortcut_curves_as_the_robot_does_at_that_roll
 
 
 def test_a_roll_missing_from_the_curvature_table_is_an_error_not_a_guess() -> None:
-    keys, curvs = smoothing.curvature_table(np.array([[0.1, 0.5, 1.0]]), 0.3, ROBOT.roll_model.curvature)
+    keys, curvs = smoothing.curvature_table(np.array([[0.1, 0.5, 1.0]]), [0.3], ROBOT.roll_model.curvature)
     assert sorted(keys.tolist()) == [-0.3, -0.1, 0.0, 0.1, 0.3]
     with pytest.raises(ValueError, match="curvature table"):
         smoothing._curvature_at(0.2, keys, curvs)
+
+
+def _end(start, motions) -> np.ndarray:
+    from planner.kinematics import motion_knots
+    return motion_knots(start[0], start[1], start[2], 0.0, np.array(motions, float).reshape(-1, 3), ROBOT.radius_m)[-1]
+
+
+def test_a_small_turn_is_shortcut_with_a_gentler_roll_when_that_is_shorter() -> None:
+    """A shortcut is rolled with a gentler held turn when that is the shorter path (each roll change shifts the
+    sphere sideways by radius × the change). A bend made of two short arcs at the sharpest turn with a straight
+    between: the sharpest turn's shortcut (one arc) still pays two shifts of r·φmax (0.16 m); the gentlest held
+    turn's pays a third of that and is shorter. Both end on the same pose, and the result is a valid chain of
+    motions."""
+    grid = OccupancyGrid.from_occupied(np.zeros((400, 400), dtype=bool), 0.05, name="open")
+    planner = HybridAStar(grid, ROBOT)
+    k = len(planner.rolls) // 2 + 1  # the gentlest turn held by the search
+    assert 0.0 < planner.rolls[k] < ROBOT.max_roll_rad / 2
+    start = (3.0, 3.0, 0.0)
+    # a bend the search might leave, cut into step-long pieces
+    turn, kappa = ROBOT.max_roll_rad, float(ROBOT.roll_model.curvature(ROBOT.max_roll_rad))
+    motions = subdivide([(0.0, 0.0, 2.0), (turn, kappa, 0.3), (0.0, 0.0, 0.5), (turn, kappa, 0.2), (0.0, 0.0, 2.0),
+                         (0.0, 0.0, 0.0)], 0.2)
+    p = planner._params((0.0, 0.0, 0.0), False)
+    sharp_only = p.copy()
+    sharp_only[kernels.P_GENTLE_N] = 0
+    length = {}
+    for name, params in (("gentle", p), ("sharp", sharp_only)):
+        out = planner._shortcut(start, motions, params, 24)
+        np.testing.assert_allclose(_end(start, out)[:3], _end(start, motions)[:3], atol=2e-4)
+        for held, curv, _ in out:
+            assert curv == pytest.approx(ROBOT.roll_model.curvature(held), rel=1e-3, abs=1e-9), name
+        length[name] = smoothing.path_length(*start, np.array(out, float), ROBOT.radius_m)
+        turning = {round(abs(held), 9) for held, _, s in out if s != 0.0 and held != 0.0}
+        if name == "gentle":
+            assert turning and max(turning) < ROBOT.max_roll_rad - 1e-9  # no sharpest turn left
+        else:
+            assert turning == {round(ROBOT.max_roll_rad, 9)}
+    assert length["gentle"] < length["sharp"] - 0.1
+    assert length["sharp"] < smoothing.path_length(*start, np.array(motions, float), ROBOT.radius_m) - 0.05
