@@ -496,11 +496,13 @@ def shot_margin(
 
 @njit(cache=True)
 def shot_length(radius: float, roll: float, groll: float, seg_roll: np.ndarray, seg_len: np.ndarray, n: int) -> float:
-    """Distance the centre travels along a shot: arcs plus the sideways shifts of its roll changes."""
+    """Distance the centre travels along a shot: arcs (forwards or backwards) plus the sideways shifts of its roll
+    changes. (Until issue 21's fourteenth round the backward arcs were subtracted: a landed Reeds–Shepp shot of
+    −6 310 m and +6 310 m on one circle passed as 0.04 m, under the 10 m cap.)"""
     total = 0.0
     croll = roll
     for k in range(n):
-        total += seg_len[k] + radius * abs(seg_roll[k] - croll)
+        total += abs(seg_len[k]) + radius * abs(seg_roll[k] - croll)
         croll = seg_roll[k]
     return total + radius * abs(groll - croll)
 

@@ -118,6 +118,35 @@ def test_compiled_shots_land_the_rolled_sphere_on_the_goal(kind: int) -> None:
     assert landed >= 55
 
 
+
+def test_a_shot_is_as_long_as_it_rolls_forwards_and_backwards_and_keeps_the_cap() -> None:
+    """A shot's length counts its backward arcs as travel (they were once subtracted) and no landed shot is longer
+    than the cap asked. The first pose pair is a join of the two trees on smoothers_world (#5 of the seed-5
+    real-map draw, moved to an open map): its Reeds–Shepp word landed with arcs of +6 310 m and −6 310 m on one
+    circle, passed the 10 m cap as 0.04 m, and was reported as a 12.6 km unsmoothed path."""
+    assert kernels.shot_length(0.3, 0.0, 0.0, np.array([0.0, 0.0]), np.array([2.0, -3.0]), 2) == pytest.approx(5.0)
+    assert kernels.shot_length(0.3, 0.1, 0.0, np.array([0.2, 0.0]), np.array([-1.0, 1.0]), 2) == pytest.approx(
+        2.0 + 0.3 * (0.1 + 0.2 + 0.0))
+    grid = OccupancyGrid.from_occupied(np.zeros((300, 300), bool), 0.05)
+    planner = HybridAStar(grid, ROBOT)
+    r = ROBOT.radius_m
+    joins = [((7.5536464, 7.4772114, -3.0470387743924587, 0.1767683254557281), (7.5, 7.5, -3.008937998530945),
+              kernels.SHOT_WEIGHTED)]
+    rng = np.random.default_rng(11)
+    for _ in range(300):
+        start = (7.5, 7.5, float(rng.uniform(-3, 3)), float(rng.choice(planner.rolls)))
+        goal = (7.5 + float(rng.uniform(-3, 3)), 7.5 + float(rng.uniform(-3, 3)), float(rng.uniform(-3, 3)))
+        joins.append((start, goal, int(rng.choice([kernels.SHOT_WEIGHTED, kernels.SHOT_SHORTEST]))))
+    for start, goal, kind in joins:
+        p = planner._params(goal, True)
+        sr, sc, sl = (np.zeros(kernels.MAX_SHOT_SEGS) for _ in range(3))
+        n = kernels.try_shot(planner.clearance.clearance, planner.clearance.blocked, p, planner.footprint.offsets_x,
+                             planner.footprint.offsets_y, planner._px, planner._py, *start, *goal, 0.0, sr, sc,
+                             sl, 10.0, 0.0, kind)
+        rolled = float(np.abs(sl[:n]).sum()) + r * float(np.abs(np.diff(np.r_[start[3], sr[:n], 0.0])).sum())
+        assert rolled < 10.0, (start, goal, sl[:n])
+        assert kernels.shot_length(r, start[3], 0.0, sr, sl, n) == pytest.approx(rolled)
+
 def test_the_centre_cell_shortcut_gives_the_exact_footprint_margin() -> None:
     """kernels._pose_margin skips the polygon test where the centre's clearance proves a hit; its margins are
     the clearance module's footprint_margin everywhere, and the shortcut does fire near walls."""
