@@ -465,6 +465,10 @@ class HybridAStar:
             self._heuristics.popitem(last=False)
         return heur
 
+    def forget_heuristics(self) -> None:
+        """Drop the cached holonomic tables (after a map change, or to time a plan as the first towards its goal)."""
+        self._heuristics.clear()
+
     @property
     def resolved_step_m(self) -> float:
         """Arc length of one expansion: the option, or max(cell diagonal, R_min × yaw bin)."""

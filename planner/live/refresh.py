@@ -87,7 +87,7 @@ def refresh(planner: HybridAStar, changed: Sequence[CellRect],
         return capped(HybridAStar(grid, planner.robot, planner.options)), time.perf_counter() - t0, "rebuilt"
     for box, members in groups:
         _patch(planner, box, members, n_reach)
-    planner._heuristics.clear()
+    planner.forget_heuristics()
     return planner, time.perf_counter() - t0, "patched"
 
 

@@ -64,6 +64,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                            "optimising until this much in all; its final path is the reference's best (default 3; "
                            "0 = optimise until the time limit)")
     real.add_argument("--no-reference", action="store_true", help="skip OMPL BIT* (no solvability reference)")
+    real.add_argument("--repeat", type=int, default=1,
+                      help="time each solved problem this many times, sphereplan and BIT*'s first solution alike, "
+                           "and keep the median (default 1; 3 steadies the per-problem time ratios)")
     perception = parser.add_argument_group("--suite perception")
     perception.add_argument("--threads", type=int, default=1, help="OpenCV threads (default 1: one core)")
     perception.add_argument("--resolutions", default=None,
@@ -98,6 +101,8 @@ def run_real(args: argparse.Namespace) -> int:
 
     if args.per_map < 1:
         raise InvalidInput("--per-map", "must be ≥ 1")
+    if args.repeat < 1:
+        raise InvalidInput("--repeat", "must be ≥ 1")
     reference_s = DEFAULT_REFERENCE_S if args.reference_time is None else args.reference_time
     if reference_s < 0:
         raise InvalidInput("--reference-time", "must be ≥ 0 (0 = until the time limit)")
@@ -121,12 +126,13 @@ def run_real(args: argparse.Namespace) -> int:
         result = run_real_bench(paths, robot, args.per_map, args.seed, time_limit_s=args.time_limit,
                                 options=options, reference=not args.no_reference,
                                 reference_s=reference_s or None,
-                                progress=progress)
+                                progress=progress, repeat=args.repeat)
     limit = "default limits (10 s ≥ 1 M cells, else 5 s)" if args.time_limit is None else f"{args.time_limit:g} s"
     ref = ("no BIT*" if args.no_reference else f"BIT* {reference_s:g} s per space" if reference_s
            else "BIT* optimising until the limit")
     title = (f"sphereplan bench --suite real: {robot.name}, {len(paths)} maps × {args.per_map} problems, seed "
-             f"{args.seed}, {limit}, {ref}, {'reversing' if result.reverse_allowed else 'forward-only'} sphereplan")
+             f"{args.seed}, {limit}, {ref}, {'reversing' if result.reverse_allowed else 'forward-only'} sphereplan"
+             + (f", times the median of {args.repeat} runs" if args.repeat > 1 else ""))
     print(title)
     print(format_real_table(result.summaries))
     csv_path = args.csv or "bench_real.csv"

@@ -40,3 +40,19 @@ def by_planner(problem: Any, grid: Any, robot: Any, checker: Any, planner: str, 
     if planner.endswith("dubins"):
         return segfaults_after_first(problem, grid, robot, checker, planner, limit, optimise, on_first)
     return raises(problem, grid, robot, checker, planner, limit, optimise, on_first)
+
+
+
+CALLS: list[tuple[str, float | None]] = []  # (planner, optimise) of every call of timed_runs in this process
+
+
+def timed_runs(problem: Any, grid: Any, robot: Any, checker: Any, planner: str, limit: float,
+               optimise: float | None, on_first: Callable[[float, float], None]) -> RunRecord:
+    """'Solves' in 60 ms when asked to optimise after its first solution, else in 10 and 20 ms in turn; the first
+    length says which call of this planner it was."""
+    k = sum(1 for p, _ in CALLS if p == planner)
+    quick = sum(1 for p, o in CALLS if p == planner and o == 0.0)
+    CALLS.append((planner, optimise))
+    t = (0.010, 0.020)[quick % 2] if optimise == 0.0 else 0.060
+    on_first(t, 5.0 + k)
+    return _record(problem, planner, "solved", t, limit, valid=True, first_length_m=5.0 + k, length_m=4.5)

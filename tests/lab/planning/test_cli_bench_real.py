@@ -84,6 +84,7 @@ def test_real_suite_without_reference_and_with_options(tmp_path: Path, capsys: p
     (["--options", "{not json"], "--options"),
     (["--options", '{"warp": 9}'], "options.warp"),
     (["--reference-time", "-1"], "--reference-time"),
+    (["--repeat", "0"], "--repeat"),
 ])
 def test_real_suite_bad_input_exits_2(argv: list[str], field: str, capsys: pytest.CaptureFixture[str]) -> None:
     assert main(["bench", "--suite", "real", *argv]) == 2

@@ -302,6 +302,41 @@ def test_the_bench_survives_reference_failures(monkeypatch: pytest.MonkeyPatch) 
     assert "ref×" in format_real_table(result.summaries)
 
 
+def test_repeated_runs_keep_the_median_time_and_the_first_runs_path(monkeypatch: pytest.MonkeyPatch) -> None:
+    """--repeat: BIT*'s first solution is timed that many times (the extra runs stop at their first solution) and
+    sphereplan's plan as well, each as the first towards its goal; the time kept is the median, the lengths the
+    first run's. A repeat below 1 is refused."""
+    from lab.planning.real import bench, isolated, runs
+    from tests.lab.planning import reference_stubs
+
+    class Stubbed(isolated.ReferenceWorker):
+        def __init__(self, ompl_seed: int = 1) -> None:
+            super().__init__(ompl_seed, runner=reference_stubs.timed_runs)
+
+    class Clock:  # sphereplan's three runs of the problem take 10, 20 and 60 ms by runs.py's clock
+        ticks = iter([0.0, 0.010, 1.0, 1.020, 2.0, 2.060])
+
+        @classmethod
+        def perf_counter(cls) -> float:
+            return next(cls.ticks)
+
+    forgotten = []
+    real_forget = runs.planner_for(SMOOTHERS, ROBOT, bench.PlannerOptions()).forget_heuristics
+    monkeypatch.setattr(type(runs.planner_for(SMOOTHERS, ROBOT, bench.PlannerOptions())), "forget_heuristics",
+                        lambda self: (forgotten.append(1), real_forget()))
+    monkeypatch.setattr(bench, "ReferenceWorker", Stubbed)
+    monkeypatch.setattr(runs, "time", Clock)
+    result = bench.run_real_bench(["smoothers_world"], ROBOT, 1, 21, time_limit_s=0.5, repeat=3)
+    mine, dubins, rs = (next(r for r in result.records if r.planner == p)
+                        for p in (SPHEREPLAN, BIT_DUBINS, BIT_REEDS_SHEPP))
+    assert mine.solved and mine.time_s == pytest.approx(0.020) and len(forgotten) == 3
+    for rec in (dubins, rs):
+        # the median of 60 ms (the first run, which optimises after) and 10 and 20 ms (runs that stop at the first)
+        assert rec.time_s == pytest.approx(0.020)
+        assert rec.first_length_m == 5.0 and rec.length_m == 4.5  # the first run's
+    with pytest.raises(ValueError, match="repeat"):
+        bench.run_real_bench(["smoothers_world"], ROBOT, 1, 21, repeat=0)
+
 def test_summary_expansions_per_metre_is_the_median_over_solved_problems() -> None:
     """Issue 21 item 3: expansions ÷ path length per solved problem (unknown counts and failures left out)."""
     from lab.planning.real.summary import format_real_table
