@@ -61,6 +61,9 @@ class RunRecord:
     distance to the nearest blocked cell or map edge along the path (capped at 1 m); ``reported_clearance_m``:
     what sphereplan's result says. ``expansions``: sphereplan's, from the result or the failure message (−1
     unknown). ``search_loop_s``: of sphereplan's time, the part in its compiled search loop (NaN unknown).
+    ``shift_m``: the sideways shift of the final path's roll changes, radius × the total roll change (eq. 1):
+    sphereplan's as it rolls it; for BIT*'s car path what a sphere would pay to roll it
+    (:func:`rolled_shift_m`), which the car's length leaves out.
     """
 
     map: str
@@ -89,6 +92,7 @@ class RunRecord:
     expansions: int
     message: str
     search_loop_s: float = math.nan
+    shift_m: float = math.nan
 
 
 CSV_COLUMNS = tuple(f.name for f in fields(RunRecord))
@@ -97,7 +101,8 @@ CSV_COLUMNS = tuple(f.name for f in fields(RunRecord))
 def _record(problem: RealProblem, planner: str, status: str, time_s: float, time_limit_s: float, *,
             valid: bool = False, first_length_m: float = math.nan, length_m: float = math.nan,
             min_clearance_m: float = math.nan, reported_clearance_m: float = math.nan, reverses: bool = False,
-            expansions: int = -1, message: str = "", search_loop_s: float = math.nan) -> RunRecord:
+            expansions: int = -1, message: str = "", search_loop_s: float = math.nan,
+            shift_m: float = math.nan) -> RunRecord:
     return RunRecord(
         map=problem.map_name, problem=problem.index, start_x=problem.start[0], start_y=problem.start[1],
         start_yaw=problem.start[2], goal_x=problem.goal[0], goal_y=problem.goal[1], goal_yaw=problem.goal[2],
@@ -105,7 +110,7 @@ def _record(problem: RealProblem, planner: str, status: str, time_s: float, time
         solved=status == "solved" and valid, time_s=time_s, time_limit_s=time_limit_s,
         first_length_m=first_length_m, length_m=length_m, reference_length_m=math.nan, length_ratio=math.nan,
         min_clearance_m=min_clearance_m, reported_clearance_m=reported_clearance_m, valid=valid,
-        reverses=reverses, expansions=expansions, message=message, search_loop_s=search_loop_s,
+        reverses=reverses, expansions=expansions, message=message, search_loop_s=search_loop_s, shift_m=shift_m,
     )
 
 
@@ -126,6 +131,25 @@ def densify(poses: np.ndarray, spacing_m: float) -> np.ndarray:
     dense = np.concatenate(out)
     dense[:, 2] = np.remainder(dense[:, 2] + math.pi, 2 * math.pi) - math.pi
     return dense
+
+
+def rolled_shift_m(poses: np.ndarray, robot: RobotProfile) -> float:
+    """The sideways shift (m) a sphere pays to roll a car's path given as dense poses (x, y, yaw): radius × the
+    total change of roll, each step held at the roll that turns with the step's curvature (its heading change ÷
+    its signed length, so a step rolled backwards counts with the sign eq. 1 gives it), upright at both ends.
+    The car's length leaves these shifts out; a sphere cannot (every turn starts and ends with a roll change)."""
+    p = np.asarray(poses, dtype=float)[:, :3]
+    if len(p) < 2:
+        return 0.0
+    d = np.diff(p[:, :2], axis=0)
+    step = np.hypot(d[:, 0], d[:, 1])
+    along = d[:, 0] * np.cos(p[:-1, 2]) + d[:, 1] * np.sin(p[:-1, 2])
+    moving = step > 1e-9
+    d_yaw = np.remainder(np.diff(p[:, 2]) + math.pi, 2 * math.pi) - math.pi
+    kappa = d_yaw[moving] / np.where(along[moving] < 0.0, -step[moving], step[moving])
+    kappa = np.clip(kappa, -robot.max_curvature, robot.max_curvature)
+    rolls = np.asarray(robot.roll_model.roll_for_curvature(kappa), dtype=float).reshape(-1)
+    return float(robot.radius_m * np.abs(np.diff(np.concatenate(([0.0], rolls, [0.0])))).sum())
 
 
 def _reverses(poses: np.ndarray) -> bool:
@@ -184,7 +208,9 @@ def run_sphereplan(problem: RealProblem, grid: OccupancyGrid, robot: RobotProfil
                    first_length_m=result.length_m, length_m=result.length_m,
                    min_clearance_m=checker.min_clearance(dense), reported_clearance_m=result.min_clearance_m,
                    reverses=bool((result.states[:, 4] < 0).any()), expansions=int(result.expansions),
-                   message=message, search_loop_s=float(result.extra.get("search_loop_time_s", math.nan)))
+                   message=message, search_loop_s=float(result.extra.get("search_loop_time_s", math.nan)),
+                   shift_m=float(robot.radius_m * np.abs(np.diff(np.concatenate(([0.0], result.states[:, 3], [0.0]))))
+                                 .sum()))
 
 
 def run_reference(problem: RealProblem, grid: OccupancyGrid, robot: RobotProfile, checker: FootprintReferee,
@@ -244,7 +270,8 @@ def run_reference(problem: RealProblem, grid: OccupancyGrid, robot: RobotProfile
     log.info("%s %s: first %.3f s (%.2f m), final %.2f m", problem.name, planner, first, first_length, length)
     return _record(problem, planner, "solved", first, time_limit_s, valid=ok, first_length_m=first_length,
                    length_m=length, min_clearance_m=checker.min_clearance(dense), reverses=_reverses(dense),
-                   message="" if ok else f"path meets an obstacle at {int(hits.sum())} interpolated poses")
+                   message="" if ok else f"path meets an obstacle at {int(hits.sum())} interpolated poses",
+                   shift_m=rolled_shift_m(dense, robot))
 
 
 def with_reference_lengths(records: Sequence[RunRecord], reverse_allowed: bool) -> list[RunRecord]:

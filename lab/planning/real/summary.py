@@ -43,7 +43,11 @@ class MapSummary:
     ``loop_expansions_per_s``: the same ÷ the time in its compiled search loop alone (the rate Nav2 reports);
     ``expansions_per_m``: sphereplan's expansions ÷ its path's length, median over its solved problems (issue 21's
     measure of how directly the search heads for the goal where there is room); ``clearance_*``:
-    medians over sphereplan's solved problems of the path's least clearance, true (polygon) and as reported.
+    medians over sphereplan's solved problems of the path's least clearance, true (polygon) and as reported;
+    ``shift_share_median``: sphereplan's sideways shifts (the roll changes', eq. 1) ÷ its path's length, median;
+    ``rolled_ratio_median``: length ÷ the reference's best as a sphere would roll it (its length plus the shifts
+    of its turns, :func:`~lab.planning.real.runs.rolled_shift_m`; the shortest such among the allowed spaces),
+    median.
     """
 
     map: str
@@ -80,6 +84,8 @@ class MapSummary:
     expansions_per_m: float
     clearance_median_m: float
     reported_clearance_median_m: float
+    shift_share_median: float = math.nan
+    rolled_ratio_median: float = math.nan
 
 
 def _median(values: Sequence[float]) -> float:
@@ -122,7 +128,7 @@ def _summary(name: str, records: list[RunRecord], checker: FootprintReferee | No
         pose = (r.start_x, r.start_y, r.start_yaw) if r.status == "start_refused" else (r.goal_x, r.goal_y, r.goal_yaw)
         if check is None or not check.collides(*pose):
             refused_free += 1
-    both_ours, both_bit, both_ratio, first_ratio, unsolved_times = [], [], [], [], []
+    both_ours, both_bit, both_ratio, first_ratio, unsolved_times, rolled = [], [], [], [], [], []
     missed = 0
     for g in by_problem.values():
         mine = g.get(SPHEREPLAN)
@@ -134,6 +140,9 @@ def _summary(name: str, records: list[RunRecord], checker: FootprintReferee | No
             both_bit.append(min(r.time_s for r in refs))
             both_ratio.append(mine.time_s / max(both_bit[-1], 1e-6))
             first_ratio.append(mine.length_m / min(r.first_length_m for r in refs))
+            rolled_refs = [r.length_m + r.shift_m for r in refs if math.isfinite(r.shift_m)]
+            if rolled_refs:  # (a CSV written before the shifts were recorded has none)
+                rolled.append(mine.length_m / min(rolled_refs))
         anyone = (mine is not None and mine.solved) or bool(ref_solved(g, set(REFERENCE_SPACES)))
         if not anyone and mine is not None and mine.status in ("timeout", "no_path", "error"):
             unsolved_times.append(mine.time_s)
@@ -166,6 +175,9 @@ def _summary(name: str, records: list[RunRecord], checker: FootprintReferee | No
         expansions_per_m=_median([r.expansions / r.length_m for r in solved if r.expansions > 0 and r.length_m > 0]),
         clearance_median_m=_median([r.min_clearance_m for r in solved]),
         reported_clearance_median_m=_median([r.reported_clearance_m for r in solved]),
+        shift_share_median=_median([r.shift_m / r.length_m for r in solved
+                                    if math.isfinite(r.shift_m) and r.length_m > 0]),
+        rolled_ratio_median=_median(rolled),
     )
 
 
@@ -195,6 +207,8 @@ TABLE_COLUMNS = (
     ("exp/m", "sphereplan expansions per metre of its path, median (solved problems)"),
     ("clear m", "sphereplan's true footprint clearance, median"),
     ("rep m", "sphereplan's reported min_clearance_m, median"),
+    ("shift", "sphereplan's sideways shifts (roll changes) ÷ its length, median"),
+    ("÷rolled", "length ÷ the reference's best plus the shifts a sphere pays to roll it, median"),
 )
 
 
@@ -225,7 +239,8 @@ def format_real_table(summaries: Sequence[MapSummary]) -> str:
             _fmt(s.length_ratio_max, 3),
             _fmt(s.first_ratio_median, 3), _fmt(s.longer_than_first, 2), _fmt(s.expansions_per_s, 0),
             _fmt(s.loop_expansions_per_s, 0), _fmt(s.expansions_per_m, 0),
-            _fmt(s.clearance_median_m, 3), _fmt(s.reported_clearance_median_m, 3),
+            _fmt(s.clearance_median_m, 3), _fmt(s.reported_clearance_median_m, 3), _fmt(s.shift_share_median, 3),
+            _fmt(s.rolled_ratio_median, 3),
         ])
     head = [c[0] for c in TABLE_COLUMNS]
     widths = [max(len(head[i]), *(len(r[i]) for r in rows)) for i in range(len(head))]

@@ -17,7 +17,7 @@ DOCUMENTED_COLUMNS = (
     "map", "problem", "start_x", "start_y", "start_yaw", "goal_x", "goal_y", "goal_yaw", "distance_m",
     "disconnected", "planner", "status", "solved", "time_s", "time_limit_s", "first_length_m", "length_m",
     "reference_length_m", "length_ratio", "min_clearance_m", "reported_clearance_m", "valid", "reverses",
-    "expansions", "message", "search_loop_s",
+    "expansions", "message", "search_loop_s", "shift_m",
 )
 
 
@@ -49,6 +49,7 @@ def test_real_suite_on_a_small_map(tmp_path: Path, capsys: pytest.CaptureFixture
     assert code == 0
     captured = capsys.readouterr()
     assert "smoothers_world" in captured.out and "BIT*RS" in captured.out and "missed" in captured.out
+    assert "÷rolled" in captured.out
     assert "\r" not in captured.err  # progress bars only on a terminal (stderr is captured here)
     with out_csv.open() as fh:
         reader = csv.DictReader(fh)
@@ -63,6 +64,8 @@ def test_real_suite_on_a_small_map(tmp_path: Path, capsys: pytest.CaptureFixture
         assert r["solved"] in ("True", "False") and r["status"]
         if r["solved"] == "True":
             assert float(r["length_m"]) > 0 and float(r["min_clearance_m"]) >= 0
+            assert 0.0 <= float(r["shift_m"]) < float(r["length_m"])  # every path here turns somewhere
+            assert float(r["shift_m"]) > 0.0
     assert out_png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and out_png.stat().st_size > 20_000
 
 

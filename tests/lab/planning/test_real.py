@@ -203,6 +203,14 @@ def test_summary_counts_and_medians() -> None:
         assert (s.unsolved, s.unsolved_time_p50_s) == (1, 0.5)
         assert s.length_ratio_median == pytest.approx(ratio) and s.length_ratio_max == pytest.approx(ratio)
         assert s.clearance_median_m == pytest.approx(0.3) and s.reported_clearance_median_m == pytest.approx(0.05)
+        assert math.isnan(s.shift_share_median) and math.isnan(s.rolled_ratio_median)  # no shifts recorded
+    # with shifts: sphereplan's 0.44 m of 11 m; the references as a sphere would roll them, 10.5 + 0.3 (Dubins)
+    # and 10.0 + 0.9 (Reeds–Shepp, more turns): the shortest rolled is Dubins's even where Reeds–Shepp is allowed
+    shifts = {(0, SPHEREPLAN): 0.44, (0, BIT_DUBINS): 0.3, (0, BIT_REEDS_SHEPP): 0.9}
+    records = [replace(r, shift_m=shifts.get((r.problem, r.planner), math.nan)) for r in records]
+    for reverse in (False, True):
+        (s,) = summarise(with_reference_lengths(records, reverse), checkers, reverse, {"m": 0.1}, {"m": "240×120"})
+        assert s.shift_share_median == pytest.approx(0.04) and s.rolled_ratio_median == pytest.approx(11.0 / 10.8)
 
 
 def test_real_figure_marks_unsolvable_and_explains_the_dashed_line() -> None:
@@ -336,6 +344,39 @@ def test_repeated_runs_keep_the_median_time_and_the_first_runs_path(monkeypatch:
         assert rec.first_length_m == 5.0 and rec.length_m == 4.5  # the first run's
     with pytest.raises(ValueError, match="repeat"):
         bench.run_real_bench(["smoothers_world"], ROBOT, 1, 21, repeat=0)
+
+def _car_path(pieces: list[tuple[float, float]], direction: float = 1.0, ds: float = 0.01,
+              then_back: list[tuple[float, float]] = ()) -> np.ndarray:
+    """Dense poses of a car path from the origin: (curvature, length) pieces rolled in ``direction``, then the
+    pieces ``then_back`` rolled the other way (after a cusp)."""
+    x = y = yaw = 0.0
+    out = [(x, y, yaw)]
+    for kappa, length, direction in [(k, s, direction) for k, s in pieces] + [(k, s, -direction) for k, s in then_back]:
+        for _ in range(round(length / ds)):
+            yaw += direction * kappa * ds  # eq. 1: the heading turns with the signed distance
+            x += direction * ds * math.cos(yaw)
+            y += direction * ds * math.sin(yaw)
+            out.append((x, y, yaw))
+    return np.array(out)
+
+
+def test_a_car_path_rolled_by_the_sphere_pays_a_shift_at_every_turn_end() -> None:
+    """A Dubins-like path (straight, left at the sharpest, straight, right, straight) rolled by the sphere changes
+    roll four times by φmax: 0 → +φ → 0 → −φ → 0, so 4·r·φmax of sideways shift, whichever way it rolls;
+    an arc straight into the opposite arc changes by 2 φmax at once; a straight path pays nothing."""
+    from lab.planning.real.runs import rolled_shift_m
+
+    k, phi, r = ROBOT.max_curvature, ROBOT.max_roll_rad, ROBOT.radius_m
+    dubins = [(0.0, 2.0), (k, 1.0), (0.0, 1.0), (-k, 0.5), (0.0, 1.0)]
+    for direction in (1.0, -1.0):
+        assert rolled_shift_m(_car_path(dubins, direction), ROBOT) == pytest.approx(4 * r * phi, rel=1e-3)
+    assert rolled_shift_m(_car_path([(k, 1.0), (-k, 1.0)]), ROBOT) == pytest.approx(4 * r * phi, rel=1e-3)
+    assert rolled_shift_m(_car_path([(0.0, 3.0)]), ROBOT) == pytest.approx(0.0, abs=1e-9)
+    # a cusp keeps the roll: left forwards, then left backwards (the heading turns the other way) is one roll
+    assert rolled_shift_m(_car_path([(k, 1.0)], then_back=[(k, 1.0)]), ROBOT) == pytest.approx(2 * r * phi, rel=1e-3)
+    half = ROBOT.roll_model.roll_for_curvature(k / 2)  # a gentler arc: its own roll, not the sharpest
+    assert rolled_shift_m(_car_path([(0.0, 1.0), (k / 2, 1.0), (0.0, 1.0)]), ROBOT) == pytest.approx(
+        2 * r * half, rel=1e-3)
 
 def test_summary_expansions_per_metre_is_the_median_over_solved_problems() -> None:
     """Issue 21 item 3: expansions ÷ path length per solved problem (unknown counts and failures left out)."""
