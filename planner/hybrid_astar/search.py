@@ -530,8 +530,11 @@ class HybridAStar:
         p[kernels.P_ALLOW_REVERSE] = 1.0 if reverse else 0.0
         p[kernels.P_N_YAW] = o.n_yaw_bins
         p[kernels.P_LONG] = float(o.open_step_factor)
-        # the held turns gentler than the sharpest, gentlest first: a shortcut may be rolled with one (kernels._gentler)
-        gentle = list(range(len(self.rolls) // 2 + 1, len(self.rolls) - 1))[-kernels.MAX_GENTLE:]
+        # the held turns gentler than the sharpest, gentlest first, at most MAX_GENTLE spread evenly over them: a
+        # shortcut may be rolled with one (kernels._gentler)
+        held = np.arange(len(self.rolls) // 2 + 1, len(self.rolls) - 1)
+        gentle = [int(held[i]) for i in np.unique(np.rint(np.linspace(0, len(held) - 1, kernels.MAX_GENTLE)))
+                  .astype(int)] if len(held) > kernels.MAX_GENTLE else [int(k) for k in held]
         p[kernels.P_GENTLE_N] = len(gentle)
         for g, k in enumerate(gentle):
             p[kernels.P_GENTLE + 2 * g] = 1.0 / self.curvatures[k]

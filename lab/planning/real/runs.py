@@ -148,8 +148,14 @@ def rolled_shift_m(poses: np.ndarray, robot: RobotProfile) -> float:
     d_yaw = np.remainder(np.diff(p[:, 2]) + math.pi, 2 * math.pi) - math.pi
     kappa = d_yaw[moving] / np.where(along[moving] < 0.0, -step[moving], step[moving])
     kappa = np.clip(kappa, -robot.max_curvature, robot.max_curvature)
-    rolls = np.asarray(robot.roll_model.roll_for_curvature(kappa), dtype=float).reshape(-1)
-    return float(robot.radius_m * np.abs(np.diff(np.concatenate(([0.0], rolls, [0.0])))).sum())
+    return shift_of_rolls(np.asarray(robot.roll_model.roll_for_curvature(kappa), dtype=float), robot.radius_m)
+
+
+def shift_of_rolls(rolls: np.ndarray, radius_m: float) -> float:
+    """Sideways shift (m) of a sphere of ``radius_m`` holding ``rolls`` (rad) in turn, upright before and after:
+    radius × the total roll change (eq. 1)."""
+    held = np.asarray(rolls, dtype=float).reshape(-1)
+    return float(radius_m * np.abs(np.diff(np.concatenate(([0.0], held, [0.0])))).sum())
 
 
 def _reverses(poses: np.ndarray) -> bool:
@@ -195,7 +201,11 @@ def run_sphereplan(problem: RealProblem, grid: OccupancyGrid, robot: RobotProfil
     for _ in range(repeat - 1):
         planner_for(grid, robot, options).forget_heuristics()
         t0 = time.perf_counter()
-        plan_path(grid, robot, problem.start, problem.goal, options, Termination(time_limit_s))
+        try:  # the search is deterministic, but a repeat near the time limit can run out of it
+            plan_path(grid, robot, problem.start, problem.goal, options, Termination(time_limit_s))
+        except PlanningError as exc:
+            log.warning("%s sphereplan: repeat %d of %d failed (%s); its time counts", problem.name, len(times) + 1,
+                        repeat, exc.msg)
         times.append(time.perf_counter() - t0)
     elapsed = float(np.median(times))
     dense = densify(result.states[:, :3], 0.5 * grid.resolution_m)
@@ -209,8 +219,7 @@ def run_sphereplan(problem: RealProblem, grid: OccupancyGrid, robot: RobotProfil
                    min_clearance_m=checker.min_clearance(dense), reported_clearance_m=result.min_clearance_m,
                    reverses=bool((result.states[:, 4] < 0).any()), expansions=int(result.expansions),
                    message=message, search_loop_s=float(result.extra.get("search_loop_time_s", math.nan)),
-                   shift_m=float(robot.radius_m * np.abs(np.diff(np.concatenate(([0.0], result.states[:, 3], [0.0]))))
-                                 .sum()))
+                   shift_m=shift_of_rolls(result.states[:, 3], robot.radius_m))
 
 
 def run_reference(problem: RealProblem, grid: OccupancyGrid, robot: RobotProfile, checker: FootprintReferee,

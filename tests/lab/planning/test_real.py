@@ -378,6 +378,29 @@ def test_a_car_path_rolled_by_the_sphere_pays_a_shift_at_every_turn_end() -> Non
     assert rolled_shift_m(_car_path([(0.0, 1.0), (k / 2, 1.0), (0.0, 1.0)]), ROBOT) == pytest.approx(
         2 * r * half, rel=1e-3)
 
+def test_a_repeat_that_runs_out_of_time_is_counted_not_fatal(monkeypatch: pytest.MonkeyPatch) -> None:
+    """--repeat on sphereplan: a repeat that fails (here its second run times out) does not end the bench; the
+    path is the first run's and the time the median of all three."""
+    from lab.planning.real import runs
+    from planner.errors import PlannerTimedOut
+
+    calls = []
+    real_plan = runs.plan_path
+
+    def flaky(*args, **kwargs):
+        calls.append(1)
+        if len(calls) == 2:
+            raise PlannerTimedOut("no path found within the time limit", planning_time_s=0.5, expansions=7)
+        return real_plan(*args, **kwargs)
+
+    monkeypatch.setattr(runs, "plan_path", flaky)
+    checker = FootprintReferee.for_robot(SMOOTHERS, ROBOT)
+    problem = draw_problems(SMOOTHERS, ROBOT, 1, np.random.default_rng(4), map_name="smoothers_world",
+                            checker=checker)[0]
+    rec = runs.run_sphereplan(problem, SMOOTHERS, ROBOT, checker, runs.PlannerOptions(), 5.0, repeat=3)
+    assert len(calls) == 3 and rec.solved and rec.status == "solved"
+    assert runs.shift_of_rolls(np.array([0.1, -0.2]), 0.3) == pytest.approx(0.3 * (0.1 + 0.3 + 0.2))
+
 def test_summary_expansions_per_metre_is_the_median_over_solved_problems() -> None:
     """Issue 21 item 3: expansions ÷ path length per solved problem (unknown counts and failures left out)."""
     from lab.planning.real.summary import format_real_table

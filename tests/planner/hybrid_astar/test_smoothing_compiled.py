@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from planner.hybrid_astar import kernels, smoothing
-from planner.hybrid_astar.search import HybridAStar
+from planner.hybrid_astar.search import HybridAStar, PlannerOptions
 from planner.kinematics import subdivide
 from planner.occupancy import OccupancyGrid
 from planner.robot import load_robot
@@ -128,3 +128,17 @@ def test_a_small_turn_is_shortcut_with_a_gentler_roll_when_that_is_shorter() -> 
             assert turning == {round(ROBOT.max_roll_rad, 9)}
     assert length["gentle"] < length["sharp"] - 0.1
     assert length["sharp"] < smoothing.path_length(*start, np.array(motions, float), ROBOT.radius_m) - 0.05
+
+
+def test_the_gentler_turns_offered_to_the_smoother_span_the_held_ones() -> None:
+    """Every held turn gentler than the sharpest (7 rolls: two), or at most MAX_GENTLE spread from the gentlest to
+    the sharpest of them (31 rolls: 14 held, 4 offered), as (radius, roll) pairs the roll model agrees with."""
+    grid = OccupancyGrid.from_occupied(np.zeros((100, 100), dtype=bool), 0.05, name="open")
+    for n_rolls, want in ((7, [4, 5]), (31, [16, 20, 25, 29])):
+        planner = HybridAStar(grid, ROBOT, PlannerOptions(n_rolls=n_rolls))
+        p = planner._params((1.0, 1.0, 0.0), True)
+        assert int(p[kernels.P_GENTLE_N]) == len(want)
+        for g, k in enumerate(want):
+            radius, roll = p[kernels.P_GENTLE + 2 * g], p[kernels.P_GENTLE + 2 * g + 1]
+            assert roll == planner.rolls[k] and radius == pytest.approx(1.0 / planner.curvatures[k])
+            assert 1.0 / radius == pytest.approx(ROBOT.roll_model.curvature(roll))
