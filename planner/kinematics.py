@@ -23,6 +23,8 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
+from planner.jit import njit_leaf
+
 
 @dataclass(frozen=True)
 class SphereState:
@@ -38,13 +40,13 @@ class SphereState:
 STRAIGHT_EPS = 1e-9
 
 
-@njit(cache=True)
+@njit_leaf
 def roll_shift(x: float, y: float, yaw: float, radius_m: float, d_roll: float) -> tuple[float, float]:
     """Centre after changing roll by ``d_roll`` (rad) at heading ``yaw``: eq. 1 with v = 0."""
     return x - radius_m * d_roll * math.sin(yaw), y + radius_m * d_roll * math.cos(yaw)
 
 
-@njit(cache=True)
+@njit_leaf
 def arc_step(x: float, y: float, yaw: float, curvature: float, s: float) -> tuple[float, float, float]:
     """Pose after rolling signed arc length ``s`` (m) at constant ``curvature`` (1/m): eq. 1 with φ̇ = 0."""
     if abs(curvature) < STRAIGHT_EPS:
@@ -57,7 +59,7 @@ def arc_step(x: float, y: float, yaw: float, curvature: float, s: float) -> tupl
     )
 
 
-@njit(cache=True)
+@njit_leaf
 def child_pose(
     x: float, y: float, yaw: float, roll_p: float, roll_c: float, curvature_c: float, radius_m: float, s: float
 ) -> tuple[float, float, float]:
@@ -124,7 +126,7 @@ def densify_motions(start: np.ndarray, motions: np.ndarray, radius_m: float, spa
     return out[:n]
 
 
-@njit(cache=True)
+@njit_leaf
 def wrap(a: float) -> float:
     """A scalar angle wrapped to (−π, π] (compiled: usable from the search loop and from Python)."""
     w = math.atan2(math.sin(a), math.cos(a))

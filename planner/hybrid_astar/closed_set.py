@@ -18,6 +18,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from planner.jit import njit_leaf
+
 DENSE_MAX_MB = 16.0  # maps whose bitset would exceed this use the hash set (measured: docs/planning.md)
 EMPTY = -(2**63)
 _MUL = -7046029254386353131  # 0x9E3779B97F4A7C15 (2^64 / golden ratio) as int64: Fibonacci hashing
@@ -57,12 +59,12 @@ def _slot(table: np.ndarray, key: int) -> int:
     return i
 
 
-@njit(cache=True)
+@njit_leaf
 def contains(table: np.ndarray, key: int) -> bool:
     return table[_slot(table, key)] == key
 
 
-@njit(cache=True)
+@njit_leaf
 def add(table: np.ndarray, key: int) -> None:
     """Add ``key`` to the hash table (the caller keeps the load at most one half)."""
     table[_slot(table, key)] = key

@@ -13,19 +13,20 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
+
+from planner.jit import njit_leaf
 
 TWO_PI = 2.0 * math.pi
 WORD_NAMES = ("LSL", "LSR", "RSL", "RSR", "RLR", "LRL")
 WORD_TURNS = np.array([[1, 0, 1], [1, 0, -1], [-1, 0, 1], [-1, 0, -1], [-1, 1, -1], [1, -1, 1]], dtype=np.int64)
 
 
-@njit(cache=True)
+@njit_leaf
 def _mod2pi(a: float) -> float:
     return a - TWO_PI * math.floor(a / TWO_PI)
 
 
-@njit(cache=True)
+@njit_leaf
 def dubins_shortest(
     x0: float, y0: float, th0: float, x1: float, y1: float, th1: float, rho: float
 ) -> tuple[int, float, float, float]:
@@ -95,7 +96,7 @@ def dubins_shortest(
     return bw, bt, bp, bq
 
 
-@njit(cache=True)
+@njit_leaf
 def dubins_distance(x0: float, y0: float, th0: float, x1: float, y1: float, th1: float, rho: float) -> float:
     """Length (m) of the shortest Dubins path at minimum turning radius ``rho`` (m)."""
     w, t, p, q = dubins_shortest(x0, y0, th0, x1, y1, th1, rho)

@@ -7,10 +7,11 @@ grows the arrays when ``size[0] == keys.size`` (``heap_push`` returns False then
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
+
+from planner.jit import njit_leaf
 
 
-@njit(cache=True)
+@njit_leaf
 def heap_push(keys: np.ndarray, vals: np.ndarray, size: np.ndarray, key: float, val: int) -> bool:
     n = size[0]
     if n >= keys.size:
@@ -29,7 +30,7 @@ def heap_push(keys: np.ndarray, vals: np.ndarray, size: np.ndarray, key: float, 
     return True
 
 
-@njit(cache=True)
+@njit_leaf
 def heap_pop(keys: np.ndarray, vals: np.ndarray, size: np.ndarray) -> tuple[float, int]:
     top_key = keys[0]
     top_val = vals[0]

@@ -22,6 +22,7 @@ from planner.hybrid_astar.dubins import WORD_TURNS, dubins_distance, dubins_shor
 from planner.hybrid_astar.heap import heap_pop, heap_push
 from planner.hybrid_astar.reeds_shepp import MAX_SEGS as RS_MAX_SEGS
 from planner.hybrid_astar.reeds_shepp import MAX_SHOT_M, rs_best, rs_ranked
+from planner.jit import njit_leaf
 from planner.kinematics import STRAIGHT_EPS, arc_step, roll_shift, wrap
 from planner.maps.clearance import circle_margin_at, footprint_hits
 
@@ -57,7 +58,7 @@ LEAST_KEPT_MARGIN_M = 0.2  # a shortcut (or the search's shot) keeps at least th
 SHORTCUT_SLACK_M = 0.2  # shortcut: a target is not shot at when the car's Dubins distance is this far over budget
 
 
-@njit(cache=True)
+@njit_leaf
 def _pose_margin(
     clear: np.ndarray, blocked: np.ndarray, p: np.ndarray, offx: np.ndarray, offy: np.ndarray, px: np.ndarray,
     py: np.ndarray, x: float, y: float, yaw: float,
@@ -74,7 +75,7 @@ def _pose_margin(
     return _pose_margin_at(clear, blocked, p, offx, offy, px, py, x, y, yaw, math.cos(yaw), math.sin(yaw))
 
 
-@njit(cache=True)
+@njit_leaf
 def _pose_margin_at(
     clear: np.ndarray, blocked: np.ndarray, p: np.ndarray, offx: np.ndarray, offy: np.ndarray, px: np.ndarray,
     py: np.ndarray, x: float, y: float, yaw: float, c: float, s: float,
@@ -96,7 +97,7 @@ def _pose_margin_at(
     return 0.0
 
 
-@njit(cache=True)
+@njit_leaf
 def _shift_margin(
     clear: np.ndarray, blocked: np.ndarray, p: np.ndarray, offx: np.ndarray, offy: np.ndarray, px: np.ndarray,
     py: np.ndarray, x: float, y: float, yaw: float, d_roll: float, worst_so_far: float,
@@ -107,7 +108,7 @@ def _shift_margin(
                             worst_so_far)
 
 
-@njit(cache=True)
+@njit_leaf
 def _shift_margin_at(
     clear: np.ndarray, blocked: np.ndarray, p: np.ndarray, offx: np.ndarray, offy: np.ndarray, px: np.ndarray,
     py: np.ndarray, x: float, y: float, yaw: float, cy: float, sy: float, d_roll: float, worst_so_far: float,
@@ -132,7 +133,7 @@ def _shift_margin_at(
     return worst
 
 
-@njit(cache=True)
+@njit_leaf
 def _arc_margin(
     clear: np.ndarray, blocked: np.ndarray, p: np.ndarray, offx: np.ndarray, offy: np.ndarray, px: np.ndarray,
     py: np.ndarray, x1: float, y1: float, yaw: float, curv: float, s: float, worst_so_far: float,
@@ -142,7 +143,7 @@ def _arc_margin(
                           worst_so_far)
 
 
-@njit(cache=True)
+@njit_leaf
 def _arc_margin_at(
     clear: np.ndarray, blocked: np.ndarray, p: np.ndarray, offx: np.ndarray, offy: np.ndarray, px: np.ndarray,
     py: np.ndarray, x1: float, y1: float, yaw: float, cy: float, sy: float, curv: float, s: float,
@@ -177,7 +178,7 @@ def _arc_margin_at(
     return worst
 
 
-@njit(cache=True)
+@njit_leaf
 def _motion_margin(
     clear: np.ndarray, blocked: np.ndarray, p: np.ndarray, offx: np.ndarray, offy: np.ndarray, px: np.ndarray,
     py: np.ndarray, x: float, y: float, yaw: float, d_roll: float, curv: float, s: float, worst_so_far: float,
@@ -202,7 +203,7 @@ def _motion_margin(
     return _arc_margin(clear, blocked, p, offx, offy, px, py, x1, y1, yaw, curv, s, worst)
 
 
-@njit(cache=True)
+@njit_leaf
 def _travel(p: np.ndarray, length: float, shift: float, curv: float, direction: int, parent_dir: int,
             margin: float) -> float:
     """The search's cost of one motion (eq. 14f with Nav2's terms): its length and sideways shift × proximity (from
@@ -222,7 +223,7 @@ def _travel(p: np.ndarray, length: float, shift: float, curv: float, direction: 
     return travel
 
 
-@njit(cache=True)
+@njit_leaf
 def _heuristic(htab: np.ndarray, rs: np.ndarray, p: np.ndarray, x: float, y: float, yaw: float) -> float:
     """max(holonomic table, Dubins distance) forward; max(holonomic, Reeds–Shepp table) with reversing."""
     ix = int(math.floor((x - p[P_HOX]) / p[P_HCELL]))
@@ -253,14 +254,7 @@ def _heuristic(htab: np.ndarray, rs: np.ndarray, p: np.ndarray, x: float, y: flo
     return h
 
 
-@njit(cache=True)
-def _wrap_cs(c: float, s: float) -> float:
-    """:func:`planner.kinematics.wrap` of an angle given its cosine and sine (the same value to the bit)."""
-    w = math.atan2(s, c)
-    return math.pi if w == -math.pi else w
-
-
-@njit(cache=True)
+@njit_leaf
 def _closed_key(p: np.ndarray, w: int, x: float, y: float, yaw: float, rb: int, n_rb: int) -> int:
     ix = int(math.floor((x - p[P_OX]) / p[P_RES]))
     iy = int(math.floor((y - p[P_OY]) / p[P_RES]))
@@ -302,7 +296,7 @@ def _shot_word(p: np.ndarray, kind: int, x: float, y: float, yaw: float, tx: flo
     return n
 
 
-@njit(cache=True)
+@njit_leaf
 def _rolled_end(x: float, y: float, yaw: float, roll: float, groll: float, turns: np.ndarray, lens: np.ndarray,
                 n: int, radius: float, rho: float, max_roll: float) -> tuple[float, float, float]:
     """Where the sphere ends after rolling the word (each arc held at ±φmax, straights upright), then ``groll``."""
@@ -472,7 +466,7 @@ def _shot_segments(
     return n
 
 
-@njit(cache=True)
+@njit_leaf
 def shot_margin(
     clear: np.ndarray, blocked: np.ndarray, p: np.ndarray, offx: np.ndarray, offy: np.ndarray, px: np.ndarray,
     py: np.ndarray, x: float, y: float, yaw: float, roll: float, seg_roll: np.ndarray, seg_curv: np.ndarray,
@@ -494,7 +488,7 @@ def shot_margin(
     return _motion_margin(clear, blocked, p, offx, offy, px, py, cx, cy, cyaw, groll - croll, 0.0, 0.0, worst)
 
 
-@njit(cache=True)
+@njit_leaf
 def shot_length(radius: float, roll: float, groll: float, seg_roll: np.ndarray, seg_len: np.ndarray, n: int) -> float:
     """Distance the centre travels along a shot: arcs (forwards or backwards) plus the sideways shifts of its roll
     changes. (Until issue 21's fourteenth round the backward arcs were subtracted: a landed Reeds–Shepp shot of
@@ -507,7 +501,7 @@ def shot_length(radius: float, roll: float, groll: float, seg_roll: np.ndarray, 
     return total + radius * abs(groll - croll)
 
 
-@njit(cache=True)
+@njit_leaf
 def _probe_margin(
     clear: np.ndarray, blocked: np.ndarray, p: np.ndarray, offx: np.ndarray, offy: np.ndarray, px: np.ndarray,
     py: np.ndarray, x: float, y: float, yaw: float, roll: float, seg_roll: np.ndarray, seg_curv: np.ndarray,
@@ -563,7 +557,7 @@ def _range_min_table(values: np.ndarray) -> np.ndarray:
     return table
 
 
-@njit(cache=True)
+@njit_leaf
 def _range_min(table: np.ndarray, i: int, j: int) -> float:
     """The minimum of the values i..j (both included) of :func:`_range_min_table`'s ``table``."""
     r = 0
@@ -737,7 +731,7 @@ def shortcut(
     return count
 
 
-@njit(cache=True)
+@njit_leaf
 def _backwards(node_f: np.ndarray, node_i: np.ndarray, k: int, step: float, seg_len: np.ndarray, n: int
                ) -> tuple[float, float]:
     """Metres rolled backwards and in all (sideways shifts left out) along the path to node ``k`` and then
@@ -756,7 +750,7 @@ def _backwards(node_f: np.ndarray, node_i: np.ndarray, k: int, step: float, seg_
     return back, total
 
 
-@njit(cache=True)
+@njit_leaf
 def _shot_cost(p: np.ndarray, parent_dir: int, seg_len: np.ndarray, n: int) -> float:
     """The search's direction-weighted cost of ``n`` shot segments after a motion in direction ``parent_dir``:
     backward metres × reverse multiplier, a switch cost per change of direction."""
@@ -774,7 +768,7 @@ def _shot_cost(p: np.ndarray, parent_dir: int, seg_len: np.ndarray, n: int) -> f
     return cost
 
 
-@njit(cache=True)
+@njit_leaf
 def _copy_shot(seg_roll: np.ndarray, seg_curv: np.ndarray, seg_len: np.ndarray, src: int, dst: int, n: int) -> None:
     """Copy ``n`` shot segments from offset ``src`` to offset ``dst`` of the segment arrays (the shot found at 0,
     the held-back one at MAX_SHOT_SEGS, the fallback at 2·MAX_SHOT_SEGS)."""
@@ -784,7 +778,7 @@ def _copy_shot(seg_roll: np.ndarray, seg_curv: np.ndarray, seg_len: np.ndarray, 
         seg_len[dst + m] = seg_len[src + m]
 
 
-@njit(cache=True)
+@njit_leaf
 def take_fallback(counters: np.ndarray, seg_roll: np.ndarray, seg_curv: np.ndarray, seg_len: np.ndarray) -> None:
     """Make the fallback shot (3d) the result."""
     _copy_shot(seg_roll, seg_curv, seg_len, 2 * MAX_SHOT_SEGS, 0, counters[C_FALL_SEGS])
@@ -794,14 +788,14 @@ def take_fallback(counters: np.ndarray, seg_roll: np.ndarray, seg_curv: np.ndarr
     counters[C_FELL_BACK] = 1
 
 
-@njit(cache=True)
+@njit_leaf
 def _may_fall(counters: np.ndarray, p: np.ndarray, keep: float) -> bool:
     """A shot asked to keep ``keep`` may become the fallback (3d) when it keeps less: fallbacks are on, and none is
     kept yet or the one kept rolls the path mostly backwards (any other replaces it)."""
     return keep > 0.0 and p[P_FALL_WAIT] > 0.0 and (counters[C_FALL_SEGS] == 0 or counters[C_FALL_BACKWARDS] == 1)
 
 
-@njit(cache=True)
+@njit_leaf
 def _keep_fallback(counters: np.ndarray, p: np.ndarray, k: int, seg_roll: np.ndarray, seg_curv: np.ndarray,
                    seg_len: np.ndarray, n: int, backwards: bool = False) -> None:
     """Keep the ``n`` shot segments from node ``k`` as the fallback (3d), waiting P_FALL_WAIT expansions, or
@@ -813,7 +807,7 @@ def _keep_fallback(counters: np.ndarray, p: np.ndarray, k: int, seg_roll: np.nda
     _copy_shot(seg_roll, seg_curv, seg_len, 0, 2 * MAX_SHOT_SEGS, n)
 
 
-@njit(cache=True)
+@njit_leaf
 def take_held(counters: np.ndarray, seg_roll: np.ndarray, seg_curv: np.ndarray, seg_len: np.ndarray) -> None:
     """Make the held-back shot (3c) the result."""
     _copy_shot(seg_roll, seg_curv, seg_len, MAX_SHOT_SEGS, 0, counters[C_HELD_SEGS])
@@ -821,6 +815,16 @@ def take_held(counters: np.ndarray, seg_roll: np.ndarray, seg_curv: np.ndarray, 
     counters[C_SHOT_SEGS] = counters[C_HELD_SEGS]
     counters[C_HELD_SEGS] = 0
     counters[C_FELL_BACK] = 0
+
+
+def child_turns(curvs: np.ndarray, p: np.ndarray) -> np.ndarray:
+    """cos (``[0]``) and sin (``[1]``) of every child's heading change in :func:`search_chunk`, rows forward and
+    backward one step, then forward and backward P_LONG steps, one column per held roll: a child's heading's cos and
+    sin are its parent's turned by these (no trigonometry per child)."""
+    long_steps = int(p[P_LONG]) if p[P_LONG] > 1.0 else 1
+    s = p[P_STEP] * np.array([1.0, -1.0, long_steps, -long_steps])
+    turn = s[:, None] * np.asarray(curvs, dtype=float)[None, :]
+    return np.stack([np.cos(turn), np.sin(turn)])
 
 
 @njit(cache=True)
@@ -831,7 +835,7 @@ def search_chunk(
     node_f: np.ndarray, node_i: np.ndarray,
     heap_keys: np.ndarray, heap_vals: np.ndarray, heap_size: np.ndarray,
     closed: np.ndarray, closed_table: np.ndarray, counters: np.ndarray, max_expansions: int,
-    seg_roll: np.ndarray, seg_curv: np.ndarray, seg_len: np.ndarray,
+    seg_roll: np.ndarray, seg_curv: np.ndarray, seg_len: np.ndarray, turns: np.ndarray,
 ) -> int:
     """Run up to ``max_expansions`` Hybrid-A* expansions.
 
@@ -900,8 +904,10 @@ def search_chunk(
         closed_set.close(closed, closed_table, key)
         done += 1
         counters[C_EXPANSIONS] += 1
-        # 2. Goal test: bring the roll back to 0 (a sideways shift) and compare with the goal pose.
-        gx, gy = roll_shift(x, y, yaw, radius, -roll)
+        c_yaw = math.cos(yaw)
+        s_yaw = math.sin(yaw)
+        # 2. Goal test: bring the roll back to 0 (a sideways shift, roll_shift) and compare with the goal pose.
+        gx, gy = x + radius * roll * s_yaw, y - radius * roll * c_yaw
         if (math.hypot(gx - p[P_GX], gy - p[P_GY]) <= p[P_TOL_XY]
                 and abs(wrap(yaw - p[P_GYAW])) <= p[P_TOL_YAW]
                 and _motion_margin(clear, blocked, p, offx, offy, px, py, x, y, yaw, -roll, 0.0, 0.0, math.inf) >= 0.0):
@@ -1011,9 +1017,8 @@ def search_chunk(
             if (0 <= nix < w and 0 <= niy < clear.shape[0]
                     and clear[niy, nix] >= p[P_REACH] + p[P_RC] + p[P_LONG] * step + 2.0 * radius * p[P_MAX_ROLL]):
                 mult = int(p[P_LONG])
-        c_yaw = math.cos(yaw)
-        s_yaw = math.sin(yaw)
-        straight_yaw = _wrap_cs(c_yaw, s_yaw)
+        straight_yaw = wrap(yaw)
+        row0 = 2 if mult > 1 else 0
         for d in range(2):
             direction = 1 if d == 0 else -1
             if direction < 0 and not allow_reverse:
@@ -1030,12 +1035,13 @@ def search_chunk(
                     cyaw = straight_yaw
                     c2, s2 = c_yaw, s_yaw
                 else:
-                    yaw2 = yaw + curv * s_child
-                    c2 = math.cos(yaw2)
-                    s2 = math.sin(yaw2)
+                    tc = turns[0, row0 + d, ri]
+                    ts = turns[1, row0 + d, ri]
+                    c2 = c_yaw * tc - s_yaw * ts
+                    s2 = s_yaw * tc + c_yaw * ts
                     cx = x1 + (s2 - s_yaw) / curv
                     cy = y1 - (c2 - c_yaw) / curv
-                    cyaw = _wrap_cs(c2, s2)
+                    cyaw = wrap(yaw + curv * s_child)
                 # a child already expanded is dropped before its (far dearer) collision sweep
                 ckey = _closed_key(p, w, cx, cy, cyaw, roll_bins[ri], n_roll_bins)
                 if closed_set.is_closed(closed, closed_table, ckey):

@@ -34,10 +34,10 @@ import math
 from typing import Any
 
 import numpy as np
-from numba import njit
 
 from planner.hybrid_astar import kernels
 from planner.hybrid_astar.reeds_shepp import MAX_SHOT_M
+from planner.jit import njit_leaf
 from planner.kinematics import wrap
 
 CELL_M = 0.5  # bucket size (m)
@@ -47,7 +47,7 @@ TRIES_PER_ROUND = 8  # shots tried per round
 PENDING_KEPT = 512  # untried candidate pairs carried over between rounds
 
 
-@njit(cache=True)
+@njit_leaf
 def _bucket(x: float, y: float, yaw: float, ox: float, oy: float, cell: float, nx: int, ny: int, nyaw: int,
             dx: int, dy: int) -> int:
     """Bucket index of a pose, shifted by (dx, dy) cells; -1 outside the map."""
@@ -60,7 +60,7 @@ def _bucket(x: float, y: float, yaw: float, ox: float, oy: float, cell: float, n
     return (iy * nx + ix) * nyaw + yb
 
 
-@njit(cache=True)
+@njit_leaf
 def index_nodes(node_f: np.ndarray, node_i: np.ndarray, lo: int, hi: int, turn: float, upright_roll: int,
                 ox: float, oy: float, cell: float, nx: int, ny: int, nyaw: int,
                 best_node: np.ndarray, best_g: np.ndarray) -> None:
@@ -75,7 +75,7 @@ def index_nodes(node_f: np.ndarray, node_i: np.ndarray, lo: int, hi: int, turn: 
             best_node[b] = k
 
 
-@njit(cache=True)
+@njit_leaf
 def find_pairs(node_f: np.ndarray, node_i: np.ndarray, lo: int, hi: int, turn: float, upright_roll: int,
                other_f: np.ndarray, other_turn: float, other_node: np.ndarray,
                ox: float, oy: float, cell: float, nx: int, ny: int, nyaw: int, rho: float, max_len: float,
@@ -118,7 +118,7 @@ def find_pairs(node_f: np.ndarray, node_i: np.ndarray, lo: int, hi: int, turn: f
     return n
 
 
-@njit(cache=True)
+@njit_leaf
 def find_turn(f_node: np.ndarray, b_node: np.ndarray, f_node_f: np.ndarray, f_node_i: np.ndarray, upright: int,
               nyaw: int, clear: np.ndarray, ox: float, oy: float, res: float, tried: np.ndarray
               ) -> tuple[int, int, int]:

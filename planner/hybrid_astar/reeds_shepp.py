@@ -37,6 +37,7 @@ from numba import njit
 from scipy.optimize import least_squares
 
 from planner.hybrid_astar.dubins import WORD_TURNS, dubins_shortest
+from planner.jit import njit_leaf
 from planner.kinematics import arc_step, roll_shift, wrap
 
 SAMPLE_M = 0.01  # spacing of the interpolated states the word is read from
@@ -64,13 +65,13 @@ FAMILY_SEGS = np.array([3, 3, 3, 4, 4, 4, 4, 5], dtype=np.int64)
 FAMILY_BACKWARDS = np.array([0, 0, 1, 0, 0, 1, 1, 0], dtype=np.int64)
 
 
-@njit(cache=True)
+@njit_leaf
 def _angle(a: float) -> float:
     """``a`` wrapped to [−π, π)."""
     return a - 2.0 * math.pi * math.floor(a / (2.0 * math.pi) + 0.5)
 
 
-@njit(cache=True)
+@njit_leaf
 def _tau_omega(u: float, v: float, xi: float, eta: float, phi: float) -> tuple[float, float]:
     """The first and last arc of the CCCC families (Reeds & Shepp's τ and ω)."""
     delta = _angle(u - v)
@@ -82,7 +83,7 @@ def _tau_omega(u: float, v: float, xi: float, eta: float, phi: float) -> tuple[f
     return tau, _angle(tau - u + v - phi)
 
 
-@njit(cache=True)
+@njit_leaf
 def _family(f: int, x: float, y: float, phi: float, out: np.ndarray) -> bool:
     """Base family ``f`` from the origin (heading 0) to (x, y, φ) in units of ρ: writes its segment lengths
     into ``out`` and returns whether that family has a solution there."""
@@ -162,7 +163,7 @@ def _family(f: int, x: float, y: float, phi: float, out: np.ndarray) -> bool:
     return t >= -_ZERO and v >= -_ZERO
 
 
-@njit(cache=True)
+@njit_leaf
 def _variant(back: int, flip: int, mirror: int, x: float, y: float, phi: float, xb: float, yb: float
              ) -> tuple[float, float, float]:
     """The goal a symmetric variant solves its base family for."""
@@ -202,7 +203,7 @@ def rs_words(x: float, y: float, phi: float, turns: np.ndarray, lens: np.ndarray
     return n
 
 
-@njit(cache=True)
+@njit_leaf
 def word_cost(lens: np.ndarray, rho: float, reverse_penalty: float, switch_cost: float) -> float:
     """Weighted cost (m) of one word (lengths in units of ρ): forward metres + ``reverse_penalty`` × backward
     metres + ``switch_cost`` per change of direction between consecutive non-empty segments."""
@@ -220,7 +221,7 @@ def word_cost(lens: np.ndarray, rho: float, reverse_penalty: float, switch_cost:
     return cost
 
 
-@njit(cache=True)
+@njit_leaf
 def _local(x0: float, y0: float, yaw0: float, x1: float, y1: float, yaw1: float, rho: float
            ) -> tuple[float, float, float]:
     """The goal in the start's frame, in units of ρ."""
@@ -229,7 +230,7 @@ def _local(x0: float, y0: float, yaw0: float, x1: float, y1: float, yaw1: float,
     return (c * dx + s * dy) / rho, (-s * dx + c * dy) / rho, yaw1 - yaw0
 
 
-@njit(cache=True)
+@njit_leaf
 def _write_word(turns: np.ndarray, lens: np.ndarray, rho: float, seg_turn: np.ndarray, seg_len: np.ndarray) -> int:
     """Write one word's non-empty segments (turn +1/0/−1, signed length in units of ``rho``) into ``seg_turn``
     and ``seg_len`` (metres); returns how many."""

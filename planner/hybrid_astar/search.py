@@ -316,6 +316,7 @@ class _Search:
         p[kernels.P_BACK_SHARE] = FORWARD_RETRY_SHARE
         p[kernels.P_BOUND] = math.inf
         self.p = p
+        self.turns = kernels.child_turns(planner.curvatures, p)
         grid = planner.grid
         n_keys = grid.width * grid.height * o.n_yaw_bins * planner.n_roll_bins
         cap = 1 << 16
@@ -367,7 +368,7 @@ class _Search:
                 pl.footprint.offsets_x, pl.footprint.offsets_y, pl._px, pl._py,
                 pl.rolls, pl.curvatures, pl.roll_bins, pl.n_roll_bins, self.node_f, self.node_i, self.heap_keys,
                 self.heap_vals, self.heap_size, self.closed, self.closed_table, self.counters, budget,
-                self.seg_roll, self.seg_curv, self.seg_len,
+                self.seg_roll, self.seg_curv, self.seg_len, self.turns,
             ))
             if status != kernels.FULL:
                 return status

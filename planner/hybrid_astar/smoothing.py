@@ -22,6 +22,7 @@ import numpy as np
 from numba import njit
 
 from planner.hybrid_astar.kernels import MAX_SHOT_SEGS, shortcut
+from planner.jit import njit_leaf
 from planner.kinematics import motion_knots, subdivide_rows
 
 
@@ -36,7 +37,7 @@ def curvature_table(motions: np.ndarray, rolls: Any, curvature: Callable[[np.nda
     return keys, np.asarray(curvature(keys), dtype=float).reshape(keys.shape)
 
 
-@njit(cache=True)
+@njit_leaf
 def _curvature_at(roll: float, keys: np.ndarray, curvs: np.ndarray) -> float:
     """The curvature at ``roll`` from :func:`curvature_table`'s arrays (an error when the roll is not there)."""
     for k in range(keys.size):
@@ -51,7 +52,7 @@ def path_length(x: float, y: float, yaw: float, motions: np.ndarray, radius: flo
     return motion_knots(x, y, yaw, 0.0, motions, radius)[-1, 4]
 
 
-@njit(cache=True)
+@njit_leaf
 def cusps(motions: np.ndarray) -> int:
     """Changes of travel direction along the motions (a motion of length 0 keeps the direction before it)."""
     n = 0

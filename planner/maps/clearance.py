@@ -45,6 +45,7 @@ import numpy as np
 from numba import njit
 from scipy import ndimage
 
+from planner.jit import njit_leaf
 from planner.occupancy import OccupancyGrid
 from planner.robot import RobotProfile
 
@@ -362,7 +363,7 @@ def _polygon_samples(poly: np.ndarray, spacing_m: float) -> np.ndarray:
     return np.concatenate(pts)
 
 
-@njit(cache=True)
+@njit_leaf
 def _point_in_polygon(x: float, y: float, px: np.ndarray, py: np.ndarray) -> bool:
     """Even-odd rule."""
     inside = False
@@ -377,7 +378,7 @@ def _point_in_polygon(x: float, y: float, px: np.ndarray, py: np.ndarray) -> boo
     return inside
 
 
-@njit(cache=True)
+@njit_leaf
 def _segment_meets_box(x0: float, y0: float, x1: float, y1: float,
                        bx0: float, by0: float, bx1: float, by1: float) -> bool:
     """Does the segment (x0, y0)–(x1, y1) meet the closed box [bx0, bx1] × [by0, by1]? (Liang–Barsky)"""
@@ -418,7 +419,7 @@ def _placed(x: float, y: float, yaw: float, px: np.ndarray, py: np.ndarray) -> t
     return x + c * px - s * py, y + s * px + c * py
 
 
-@njit(cache=True)
+@njit_leaf
 def footprint_hits(
     blocked: np.ndarray, ox: float, oy: float, res: float, x: float, y: float, yaw: float,
     px: np.ndarray, py: np.ndarray,
@@ -454,8 +455,6 @@ def footprint_hits(
     if ix0 < 0 or iy0 < 0 or ix1 >= w or iy1 >= h:
         return True
     reach2 = (math.sqrt(reach2) + 1e-9) ** 2
-    wx = wy = px  # placed on first use
-    placed = False
     for iy in range(iy0, iy1 + 1):
         by0 = oy + iy * res
         gy = max(by0 - y, 0.0, y - by0 - res)
@@ -468,14 +467,17 @@ def footprint_hits(
             gx = max(bx0 - x, 0.0, x - bx0 - res)
             if gx * gx + gy * gy > reach2:
                 continue
-            if not placed:
-                wx, wy = _placed(x, y, yaw, px, py)
-                placed = True
-            if _point_in_polygon(bx0 + 0.5 * res, by0 + 0.5 * res, wx, wy):
+            # (the cell's centre in the body frame against the body-frame polygon: nothing is allocated, so the
+            # search's compiled sweeps call this without reference counting)
+            dx = bx0 + 0.5 * res - x
+            dy = by0 + 0.5 * res - y
+            if _point_in_polygon(c * dx + s * dy, -s * dx + c * dy, px, py):
                 return True
             j = n - 1
             for i in range(n):
-                if _segment_meets_box(wx[j], wy[j], wx[i], wy[i], bx0, by0, bx0 + res, by0 + res):
+                if _segment_meets_box(x + c * px[j] - s * py[j], y + s * px[j] + c * py[j],
+                                      x + c * px[i] - s * py[i], y + s * px[i] + c * py[i],
+                                      bx0, by0, bx0 + res, by0 + res):
                     return True
                 j = i
     return False
@@ -617,7 +619,7 @@ def circle_margin(
     return circle_margin_at(clear, ox, oy, res, x, y, math.cos(yaw), math.sin(yaw), offx, offy, r_c)
 
 
-@njit(cache=True)
+@njit_leaf
 def circle_margin_at(
     clear: np.ndarray, ox: float, oy: float, res: float, x: float, y: float, c: float, s: float,
     offx: np.ndarray, offy: np.ndarray, r_c: float,

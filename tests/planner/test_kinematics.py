@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
-from planner.kinematics import child_pose, densify_motions, motion_knots
+from planner.kinematics import child_pose, densify_motions, motion_knots, wrap
 
 R = 0.30
 
@@ -97,3 +97,21 @@ def test_motion_knots_follow_the_motions_and_count_arcs_and_shifts() -> None:
     assert np.allclose(knots[-1, :3], end[:3], atol=1e-9)
     shifts = radius * np.abs(np.diff(motions[:, 0], prepend=0.0)).sum()
     assert knots[-1, 4] == pytest.approx(np.abs(motions[:, 2]).sum() + shifts)
+
+
+@pytest.mark.parametrize("a", [0.0, 1.0, -1.0, math.pi, -math.pi, 3 * math.pi, -3 * math.pi, 2 * math.pi,
+                               math.pi + 1e-12, -math.pi - 1e-12, 7.5, -7.5, 123.456, -1e4, 1e6])
+def test_wrap_moves_by_whole_turns_into_the_half_open_range(a: float) -> None:
+    w = wrap(a)
+    assert -math.pi < w <= math.pi
+    # the same angle: sine and cosine agree (atan2 of them is the reference wrap), to rounding of the turns removed
+    assert math.isclose(math.sin(w), math.sin(a), abs_tol=1e-9) and math.isclose(math.cos(w), math.cos(a), abs_tol=1e-9)
+    assert abs(w - math.atan2(math.sin(a), math.cos(a))) < 1e-9 or abs(abs(w) - math.pi) < 1e-9
+    if -math.pi < a <= math.pi:
+        assert w == a  # an angle in range comes back as it is, to the bit
+
+
+def test_wrap_of_the_half_turn_boundary_and_of_non_finite_angles() -> None:
+    assert wrap(-math.pi) == math.pi and wrap(math.pi) == math.pi
+    assert math.isclose(wrap(3 * math.pi), math.pi, abs_tol=1e-15) and wrap(3 * math.pi) <= math.pi
+    assert math.isnan(wrap(math.nan)) and math.isnan(wrap(math.inf)) and math.isnan(wrap(-math.inf))
