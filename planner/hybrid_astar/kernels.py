@@ -817,6 +817,18 @@ def take_held(counters: np.ndarray, seg_roll: np.ndarray, seg_curv: np.ndarray, 
     counters[C_FELL_BACK] = 0
 
 
+@njit_leaf
+def clear_closed(bits: np.ndarray, p: np.ndarray, w: int, node_f: np.ndarray, node_i: np.ndarray, n_nodes: int,
+                 roll_bins: np.ndarray, n_roll_bins: int) -> None:
+    """Zero every byte of the bitset ``bits`` that a key of the search's nodes 0 … ``n_nodes`` − 1 falls in:
+    :func:`search_chunk` closes only the keys of nodes it popped (1.), and a node's key is its stored pose's, so
+    afterwards the whole bitset is zero (:class:`planner.hybrid_astar.closed_set.BitsetPool`)."""
+    for k in range(n_nodes):
+        key = _closed_key(p, w, node_f[k, 0], node_f[k, 1], node_f[k, 2], roll_bins[node_i[k, 1]], n_roll_bins)
+        if 0 <= key >> 3 < bits.size:
+            bits[key >> 3] = 0
+
+
 def child_turns(curvs: np.ndarray, p: np.ndarray) -> np.ndarray:
     """cos (``[0]``) and sin (``[1]``) of every child's heading change in :func:`search_chunk`, rows forward and
     backward one step, then forward and backward P_LONG steps, one column per held roll: a child's heading's cos and
