@@ -1018,9 +1018,9 @@ def search_chunk(
         #    OPEN_MIN_H from the goal, a child rolls P_LONG steps at once (item 3 of issue 21: fewer expansions where
         #    there is room); its sweep is checked as any.
         #    node_i[., 2] then holds direction × steps.
-        #    The parent's heading's sine and cosine are computed once: every child, and every sample of the sweeps,
-        #    then needs only its own heading's (the poses are roll_shift's and arc_step's to the bit, so the search
-        #    closes the same bins; a child's heading is wrapped from the same sine and cosine, as wrap() does).
+        #    The parent's heading's sine and cosine are computed once (at the goal test, 2.): a child's are them turned
+        #    by its primitive's heading change (``turns``, child_turns), so no child computes a sine, cosine or atan2;
+        #    its pose is arc_step's to rounding and its heading is wrap()ped by whole turns.
         parent_dir = 1 if node_i[k, 2] > 0 else -1 if node_i[k, 2] < 0 else 0
         mult = 1
         if p[P_LONG] > 1.0 and h_here > OPEN_MIN_H:
