@@ -323,6 +323,7 @@ class _Search:
         cap = 1 << 16
         # a bitset (one of the planner's finished searches' when it has one), else a hash set (closed_set)
         self.closed, self.closed_table = closed_set.new_sets(n_keys, cap, planner.bitset_pool)
+        self._width = planner.clearance.clearance.shape[1]  # the keys' row length, for __del__'s clearing
         self.node_f = np.empty((cap, 5))
         self.node_i = np.empty((cap, 3), dtype=np.int64)
         self.heap_keys = np.empty(cap * 2)
@@ -352,8 +353,8 @@ class _Search:
             n_nodes = int(self.counters[kernels.C_NODES])
             if n_nodes * CLEAR_BYTES_PER_NODE < bits.size:
                 pl = self.planner
-                kernels.clear_closed(bits, self.p, pl.clearance.clearance.shape[1], self.node_f, self.node_i, n_nodes,
-                                     pl.roll_bins, pl.n_roll_bins)
+                kernels.clear_closed(bits, self.p, self._width, self.node_f, self.node_i, n_nodes, pl.roll_bins,
+                                     pl.n_roll_bins)
             else:
                 bits.fill(0)
             self.planner.bitset_pool.give_back(bits)
