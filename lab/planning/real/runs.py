@@ -114,6 +114,11 @@ def _record(problem: RealProblem, planner: str, status: str, time_s: float, time
     )
 
 
+def _wrapped(angles: np.ndarray) -> np.ndarray:
+    """Angles (rad) moved by whole turns into [−π, π)."""
+    return np.remainder(angles + math.pi, 2 * math.pi) - math.pi
+
+
 def densify(poses: np.ndarray, spacing_m: float) -> np.ndarray:
     """Poses (n, ≥ 3: x, y, yaw) with extra poses interpolated so consecutive ones are ≤ ``spacing_m`` apart
     (x, y linearly; yaw along the shorter way round). Returns (m, 3)."""
@@ -122,14 +127,14 @@ def densify(poses: np.ndarray, spacing_m: float) -> np.ndarray:
         return p.copy()
     step = np.hypot(np.diff(p[:, 0]), np.diff(p[:, 1]))
     parts = np.maximum(1, np.ceil(step / spacing_m).astype(int))
-    d_yaw = np.remainder(np.diff(p[:, 2]) + math.pi, 2 * math.pi) - math.pi
+    d_yaw = _wrapped(np.diff(p[:, 2]))
     out = [p[:1]]
     for i, k in enumerate(parts):
         t = (np.arange(1, k + 1) / k)[:, None]
         seg = p[i] + t * np.array([p[i + 1, 0] - p[i, 0], p[i + 1, 1] - p[i, 1], d_yaw[i]])
         out.append(seg)
     dense = np.concatenate(out)
-    dense[:, 2] = np.remainder(dense[:, 2] + math.pi, 2 * math.pi) - math.pi
+    dense[:, 2] = _wrapped(dense[:, 2])
     return dense
 
 
@@ -145,7 +150,7 @@ def rolled_shift_m(poses: np.ndarray, robot: RobotProfile) -> float:
     step = np.hypot(d[:, 0], d[:, 1])
     along = d[:, 0] * np.cos(p[:-1, 2]) + d[:, 1] * np.sin(p[:-1, 2])
     moving = step > 1e-9
-    d_yaw = np.remainder(np.diff(p[:, 2]) + math.pi, 2 * math.pi) - math.pi
+    d_yaw = _wrapped(np.diff(p[:, 2]))
     kappa = d_yaw[moving] / np.where(along[moving] < 0.0, -step[moving], step[moving])
     kappa = np.clip(kappa, -robot.max_curvature, robot.max_curvature)
     return shift_of_rolls(np.asarray(robot.roll_model.roll_for_curvature(kappa), dtype=float), robot.radius_m)

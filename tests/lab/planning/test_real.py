@@ -345,6 +345,7 @@ def test_repeated_runs_keep_the_median_time_and_the_first_runs_path(monkeypatch:
     with pytest.raises(ValueError, match="repeat"):
         bench.run_real_bench(["smoothers_world"], ROBOT, 1, 21, repeat=0)
 
+
 def _car_path(pieces: list[tuple[float, float]], direction: float = 1.0, ds: float = 0.01,
               then_back: list[tuple[float, float]] = ()) -> np.ndarray:
     """Dense poses of a car path from the origin: (curvature, length) pieces rolled in ``direction``, then the
@@ -378,6 +379,7 @@ def test_a_car_path_rolled_by_the_sphere_pays_a_shift_at_every_turn_end() -> Non
     assert rolled_shift_m(_car_path([(0.0, 1.0), (k / 2, 1.0), (0.0, 1.0)]), ROBOT) == pytest.approx(
         2 * r * half, rel=1e-3)
 
+
 def test_a_repeat_that_runs_out_of_time_is_counted_not_fatal(monkeypatch: pytest.MonkeyPatch) -> None:
     """--repeat on sphereplan: a repeat that fails (here its second run times out) does not end the bench; the
     path is the first run's and the time the median of all three."""
@@ -399,7 +401,13 @@ def test_a_repeat_that_runs_out_of_time_is_counted_not_fatal(monkeypatch: pytest
                             checker=checker)[0]
     rec = runs.run_sphereplan(problem, SMOOTHERS, ROBOT, checker, runs.PlannerOptions(), 5.0, repeat=3)
     assert len(calls) == 3 and rec.solved and rec.status == "solved"
+
+
+def test_the_shift_of_held_rolls_counts_every_change_from_upright_and_back() -> None:
+    from lab.planning.real import runs
+
     assert runs.shift_of_rolls(np.array([0.1, -0.2]), 0.3) == pytest.approx(0.3 * (0.1 + 0.3 + 0.2))
+
 
 def test_summary_expansions_per_metre_is_the_median_over_solved_problems() -> None:
     """Issue 21 item 3: expansions ÷ path length per solved problem (unknown counts and failures left out)."""
