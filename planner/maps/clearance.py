@@ -420,6 +420,73 @@ def _placed(x: float, y: float, yaw: float, px: np.ndarray, py: np.ndarray) -> t
 
 
 @njit_leaf
+def convex_turn(px: np.ndarray, py: np.ndarray) -> int:
+    """1 when the polygon (px, py) is convex and counter-clockwise, −1 when convex and clockwise, 0 otherwise: every
+    two edges in a row turn the same way (or go straight) and the edges' x and y directions each change sign at
+    most twice (which rules out a star that winds round more than once)."""
+    n = px.size
+    if n < 3:
+        return 0
+    turn = 0
+    flips_x = flips_y = 0
+    last_x = last_y = 0.0
+    for i in range(n):
+        j = (i + 1) % n
+        k = (i + 2) % n
+        ex, ey = px[j] - px[i], py[j] - py[i]
+        cross = ex * (py[k] - py[j]) - ey * (px[k] - px[j])
+        if cross != 0.0:
+            side = 1 if cross > 0.0 else -1
+            if turn == 0:
+                turn = side
+            elif side != turn:
+                return 0
+        if ex != 0.0:
+            if last_x != 0.0 and (ex > 0.0) != (last_x > 0.0):
+                flips_x += 1
+            last_x = ex
+        if ey != 0.0:
+            if last_y != 0.0 and (ey > 0.0) != (last_y > 0.0):
+                flips_y += 1
+            last_y = ey
+    # (the count above misses the flip from the last edge back round to the first)
+    first_x = first_y = 0.0
+    for i in range(n):
+        ex, ey = px[(i + 1) % n] - px[i], py[(i + 1) % n] - py[i]
+        if first_x == 0.0:
+            first_x = ex
+        if first_y == 0.0:
+            first_y = ey
+    if first_x != 0.0 and last_x != 0.0 and (first_x > 0.0) != (last_x > 0.0):
+        flips_x += 1
+    if first_y != 0.0 and last_y != 0.0 and (first_y > 0.0) != (last_y > 0.0):
+        flips_y += 1
+    if flips_x > 2 or flips_y > 2:
+        return 0
+    return turn
+
+
+@njit_leaf
+def _square_meets_convex(cx: float, cy: float, half: float, c: float, s: float, px: np.ndarray, py: np.ndarray,
+                         turn: int) -> bool:
+    """Does the closed square of half-side ``half`` centred at (cx, cy) in the body frame, its sides along the world's
+    axes (the world x axis is (c, −s) there, y is (s, c)), meet the convex polygon (px, py) (``turn`` as
+    :func:`convex_turn` gives it)? Two convex shapes are apart exactly when an edge normal of one of them separates
+    them (separating axes); the square's own axes never do here, as the caller takes only cells within the
+    polygon's bounding box, so only the polygon's edges are tried: the square lies wholly beyond an edge when even
+    its corner nearest that edge's line is beyond it. Touching counts as meeting."""
+    n = px.size
+    j = n - 1
+    for i in range(n):
+        nx = (py[i] - py[j]) * turn  # the edge's outward normal (not of unit length; the test scales with it)
+        ny = (px[j] - px[i]) * turn
+        if nx * cx + ny * cy - half * (abs(nx * c - ny * s) + abs(nx * s + ny * c)) > nx * px[j] + ny * py[j]:
+            return False
+        j = i
+    return True
+
+
+@njit_leaf
 def footprint_hits(
     blocked: np.ndarray, ox: float, oy: float, res: float, x: float, y: float, yaw: float,
     px: np.ndarray, py: np.ndarray,
@@ -427,7 +494,9 @@ def footprint_hits(
     """Does the footprint polygon (body frame px, py) at pose (x, y, yaw) meet a blocked cell or leave the map?
 
     Exact for square cells: a blocked cell meets the polygon when its centre is inside it or one of its
-    edges crosses the cell. ``blocked`` is the (height, width) boolean grid.
+    edges crosses the cell; for a convex polygon (every footprint in robots/ so far) when no edge of the polygon
+    separates it (:func:`_square_meets_convex`, the same answer without the even-odd rule and the sixteen clipped
+    edges). ``blocked`` is the (height, width) boolean grid.
 
     The search calls this wherever the covering circles touch an obstacle, millions of times per plan batch,
     and there the polygon almost never does: a blocked cell of the bounding box farther from the pose than the
@@ -455,6 +524,7 @@ def footprint_hits(
     if ix0 < 0 or iy0 < 0 or ix1 >= w or iy1 >= h:
         return True
     reach2 = (math.sqrt(reach2) + 1e-9) ** 2
+    turn = 2  # convex_turn(px, py), once needed
     for iy in range(iy0, iy1 + 1):
         by0 = oy + iy * res
         gy = max(by0 - y, 0.0, y - by0 - res)
@@ -471,6 +541,12 @@ def footprint_hits(
             # search's compiled sweeps call this without reference counting)
             dx = bx0 + 0.5 * res - x
             dy = by0 + 0.5 * res - y
+            if turn == 2:  # (worked out at the first blocked cell within reach)
+                turn = convex_turn(px, py)
+            if turn != 0:
+                if _square_meets_convex(c * dx + s * dy, -s * dx + c * dy, 0.5 * res, c, s, px, py, turn):
+                    return True
+                continue
             if _point_in_polygon(c * dx + s * dy, -s * dx + c * dy, px, py):
                 return True
             j = n - 1

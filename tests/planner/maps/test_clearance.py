@@ -16,6 +16,7 @@ from planner.maps.clearance import (
     _point_in_polygon,
     _segment_meets_box,
     boundary_cell_centres,
+    convex_turn,
     least_footprint_distance,
 )
 from planner.maps.clearance import footprint_hits as footprint_hits_compiled
@@ -274,3 +275,35 @@ def test_least_footprint_distance_is_zero_for_a_footprint_over_an_obstacle() -> 
     free = clear.footprint_distances(robot.footprint_polygon, poses[:1], reach_m=1.0)[0]
     assert 0.3 < free < 1.0
     assert clear.least_footprint_distance(robot.footprint_polygon, poses, np.array([-0.5, -0.1])) == 0.0
+
+
+_L_SHAPE = np.array([[0.3, -0.2], [0.3, 0.0], [0.0, 0.0], [0.0, 0.3], [-0.2, 0.3], [-0.2, -0.2]])
+_STAR = np.array([[0.3 * math.cos(a), 0.3 * math.sin(a)] for a in np.arange(5) * 4 * math.pi / 5])  # winds twice
+
+
+def test_convex_turn_tells_convex_polygons_and_their_orientation() -> None:
+    square = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
+    with_a_straight_vertex = np.array([[0.0, 0.0], [0.5, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
+    for poly, want in ((square, 1), (square[::-1], -1), (with_a_straight_vertex, 1),
+                       (load_robot("zju-60").footprint_polygon, None), (_L_SHAPE, 0), (_L_SHAPE[::-1], 0),
+                       (_STAR, 0), (square[:2], 0)):
+        got = convex_turn(np.ascontiguousarray(poly[:, 0]), np.ascontiguousarray(poly[:, 1]))
+        assert got == want if want is not None else got in (1, -1), (poly, got)
+
+
+@pytest.mark.parametrize("poly", [_L_SHAPE, _STAR, _L_SHAPE[::-1]], ids=["L", "star", "L clockwise"])
+def test_a_footprint_that_is_not_convex_gets_the_plain_tests_answer(poly: np.ndarray) -> None:
+    """The separating-edge test holds for convex polygons only: any other footprint takes the even-odd rule and
+    the clipped edges, and answers as the every-cell test (an L's notch over a lone cell is free)."""
+    rng = np.random.default_rng(9)
+    occ = rng.random((80, 80)) < 0.01
+    clear = ClearanceMap(OccupancyGrid.from_occupied(occ, 0.05))
+    px, py = np.ascontiguousarray(poly[:, 0]), np.ascontiguousarray(poly[:, 1])
+    args = (clear.blocked, clear.origin_x, clear.origin_y, clear.resolution_m)
+    answers = set()
+    for x, y, yaw in zip(rng.uniform(0.5, 3.5, 3000), rng.uniform(0.5, 3.5, 3000), rng.uniform(-3.2, 3.2, 3000),
+                         strict=True):
+        fast = footprint_hits_compiled(*args, x, y, yaw, px, py)
+        assert fast == _hits_every_cell(*args, x, y, yaw, px, py), (x, y, yaw)
+        answers.add(fast)
+    assert answers == {True, False}
