@@ -423,16 +423,16 @@ def _placed(x: float, y: float, yaw: float, px: np.ndarray, py: np.ndarray) -> t
 def convex_turn(px: np.ndarray, py: np.ndarray) -> int:
     """1 when the polygon (px, py) is convex and counter-clockwise, −1 when convex and clockwise, 0 otherwise: every
     two edges in a row turn the same way (or go straight) and the edges' x and y directions each change sign at
-    most twice (which rules out a star that winds round more than once)."""
+    most twice going round (which rules out a star that winds round more than once)."""
     n = px.size
     if n < 3:
         return 0
     turn = 0
     flips_x = flips_y = 0
-    last_x = last_y = 0.0
+    first_x = first_y = last_x = last_y = 0.0  # the first and the latest edge direction that is not 0
     for i in range(n):
-        j = (i + 1) % n
-        k = (i + 2) % n
+        j = i + 1 if i + 1 < n else 0
+        k = j + 1 if j + 1 < n else 0
         ex, ey = px[j] - px[i], py[j] - py[i]
         cross = ex * (py[k] - py[j]) - ey * (px[k] - px[j])
         if cross != 0.0:
@@ -444,26 +444,21 @@ def convex_turn(px: np.ndarray, py: np.ndarray) -> int:
         if ex != 0.0:
             if last_x != 0.0 and (ex > 0.0) != (last_x > 0.0):
                 flips_x += 1
+            if first_x == 0.0:
+                first_x = ex
             last_x = ex
         if ey != 0.0:
             if last_y != 0.0 and (ey > 0.0) != (last_y > 0.0):
                 flips_y += 1
+            if first_y == 0.0:
+                first_y = ey
             last_y = ey
-    # (the count above misses the flip from the last edge back round to the first)
-    first_x = first_y = 0.0
-    for i in range(n):
-        ex, ey = px[(i + 1) % n] - px[i], py[(i + 1) % n] - py[i]
-        if first_x == 0.0:
-            first_x = ex
-        if first_y == 0.0:
-            first_y = ey
-    if first_x != 0.0 and last_x != 0.0 and (first_x > 0.0) != (last_x > 0.0):
+    # and from the last edge back round to the first
+    if first_x != 0.0 and (first_x > 0.0) != (last_x > 0.0):
         flips_x += 1
-    if first_y != 0.0 and last_y != 0.0 and (first_y > 0.0) != (last_y > 0.0):
+    if first_y != 0.0 and (first_y > 0.0) != (last_y > 0.0):
         flips_y += 1
-    if flips_x > 2 or flips_y > 2:
-        return 0
-    return turn
+    return turn if flips_x <= 2 and flips_y <= 2 else 0
 
 
 @njit_leaf
