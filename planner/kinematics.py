@@ -43,7 +43,13 @@ STRAIGHT_EPS = 1e-9
 @njit_leaf
 def roll_shift(x: float, y: float, yaw: float, radius_m: float, d_roll: float) -> tuple[float, float]:
     """Centre after changing roll by ``d_roll`` (rad) at heading ``yaw``: eq. 1 with v = 0."""
-    return x - radius_m * d_roll * math.sin(yaw), y + radius_m * d_roll * math.cos(yaw)
+    return roll_shift_cs(x, y, math.cos(yaw), math.sin(yaw), radius_m, d_roll)
+
+
+@njit_leaf
+def roll_shift_cs(x: float, y: float, c: float, s: float, radius_m: float, d_roll: float) -> tuple[float, float]:
+    """:func:`roll_shift` given the heading's cosine ``c`` and sine ``s`` (the search has them already)."""
+    return x - radius_m * d_roll * s, y + radius_m * d_roll * c
 
 
 @njit_leaf

@@ -23,7 +23,7 @@ from planner.hybrid_astar.heap import heap_pop, heap_push
 from planner.hybrid_astar.reeds_shepp import MAX_SEGS as RS_MAX_SEGS
 from planner.hybrid_astar.reeds_shepp import MAX_SHOT_M, rs_best, rs_ranked
 from planner.jit import njit_leaf
-from planner.kinematics import STRAIGHT_EPS, arc_step, roll_shift, wrap
+from planner.kinematics import STRAIGHT_EPS, arc_step, roll_shift, roll_shift_cs, wrap
 from planner.maps.clearance import circle_margin_at, footprint_hits
 
 RUNNING, FOUND, EXHAUSTED, FULL = 0, 1, 2, 3
@@ -41,14 +41,15 @@ N_COUNTERS = 15
  P_STEP, P_SPACING, P_NON_STRAIGHT, P_CHANGE, P_REVERSE, P_SWITCH, P_COST_PENALTY, P_PROX_RANGE, P_GREED,
  P_SHOT_RATIO, P_MAX_ROLL, P_USE_DUBINS, P_ALLOW_REVERSE, P_N_YAW, P_USE_RS, P_RS_CELL, P_RS_HALF,
  P_PREFERRED, P_REACH, P_BEST_H, P_REJECT, P_CLOSER_H, P_HELD_COST, P_BACK_SHARE, P_BOUND, P_LONG,
- P_GCOS, P_GSIN, P_FALL_WAIT, P_BACK_WAIT, P_HOLD_WAIT, P_GENTLE_N, P_GENTLE) = range(47)
+ P_GCOS, P_GSIN, P_FALL_WAIT, P_BACK_WAIT, P_HOLD_WAIT, P_CONVEX, P_GENTLE_N, P_GENTLE) = range(48)
 # P_GCOS, P_GSIN: cos and sin of P_GYAW (for the Reeds–Shepp table's frame); P_FALL_WAIT: expansions a fallback
 # shot (3d) waits for one that keeps the room asked, 0 = no fallback shots; P_BACK_WAIT: a fallback shot that rolls
 # the path mostly backwards waits this × P_FALL_WAIT, 0 = none is kept; P_HOLD_WAIT: expansions a held-back shot (3c)
-# waits for a path that rolls forwards more; P_GENTLE_N: how many turns gentler than ±P_MAX_ROLL at radius P_RHO a
-# shortcut may be rolled with instead (:func:`_gentler`), as pairs (radius, roll) from P_GENTLE on, gentlest first
+# waits for a path that rolls forwards more; P_CONVEX: clearance.convex_turn of the footprint polygon (0, the old
+# test, when left unset); P_GENTLE_N: how many turns gentler than ±P_MAX_ROLL at radius P_RHO a shortcut may be
+# rolled with instead (:func:`_gentler`), as pairs (radius, roll) from P_GENTLE on, gentlest first
 MAX_GENTLE = 4
-N_PARAMS = 47 + 2 * MAX_GENTLE
+N_PARAMS = 48 + 2 * MAX_GENTLE
 BEST_SHOT_EVERY = 256  # reversing: every this many expansions, a Reeds–Shepp shot from the closest node if new
 NEAR_TIE = 1.05  # the second / third cheapest Reeds–Shepp word is shot only within this ratio of the cheapest
 MAX_SHOT_SEGS = 6  # a Dubins shot has 3 segments, a Reeds–Shepp shot up to 5
@@ -92,7 +93,7 @@ def _pose_margin_at(
     h, w = clear.shape
     if 0 <= ix < w and 0 <= iy < h and clear[iy, ix] < p[P_REJECT]:
         return hit
-    if footprint_hits(blocked, ox, oy, res, x, y, yaw, px, py):
+    if footprint_hits(blocked, ox, oy, res, x, y, yaw, px, py, int(p[P_CONVEX])):
         return hit
     return 0.0
 
@@ -123,7 +124,7 @@ def _shift_margin_at(
     while t < shift:
         t = min(shift, t + advance)
         dr = math.copysign(t / radius, d_roll)
-        xs, ys = x - radius * dr * sy, y + radius * dr * cy
+        xs, ys = roll_shift_cs(x, y, cy, sy, radius, dr)
         m = _pose_margin_at(clear, blocked, p, offx, offy, px, py, xs, ys, yaw, cy, sy)
         if m < worst:
             worst = m
@@ -918,8 +919,8 @@ def search_chunk(
         counters[C_EXPANSIONS] += 1
         c_yaw = math.cos(yaw)
         s_yaw = math.sin(yaw)
-        # 2. Goal test: bring the roll back to 0 (a sideways shift, roll_shift) and compare with the goal pose.
-        gx, gy = x + radius * roll * s_yaw, y - radius * roll * c_yaw
+        # 2. Goal test: bring the roll back to 0 (a sideways shift) and compare with the goal pose.
+        gx, gy = roll_shift_cs(x, y, c_yaw, s_yaw, radius, -roll)
         if (math.hypot(gx - p[P_GX], gy - p[P_GY]) <= p[P_TOL_XY]
                 and abs(wrap(yaw - p[P_GYAW])) <= p[P_TOL_YAW]
                 and _motion_margin(clear, blocked, p, offx, offy, px, py, x, y, yaw, -roll, 0.0, 0.0, math.inf) >= 0.0):

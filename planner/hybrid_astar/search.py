@@ -65,7 +65,7 @@ from planner.hybrid_astar.heuristics import (
 )
 from planner.hybrid_astar.two_ended import GoalSide, goal_side_possible
 from planner.kinematics import densify_motions, motion_knots, subdivide, wrap
-from planner.maps.clearance import CircleFootprint, ClearanceMap, inscribed_radius
+from planner.maps.clearance import CircleFootprint, ClearanceMap, convex_turn, inscribed_radius
 from planner.maps.reachability import refuse_unreachable
 from planner.occupancy import OccupancyGrid
 from planner.result import PlanResult, build_states
@@ -555,6 +555,8 @@ class HybridAStar:
         p[kernels.P_REACH] = float(np.hypot(self.footprint.offsets_x, self.footprint.offsets_y).max())
         res = self.grid.resolution_m
         p[kernels.P_REJECT] = inscribed_radius(self.polygon) - (math.sqrt(2.0) + math.sqrt(0.5)) * res - 1e-6
+        # (the same for the polygon turned by π, smoothing.turned_round: a rotation keeps convexity and orientation)
+        p[kernels.P_CONVEX] = convex_turn(self._px, self._py)
         p[kernels.P_GREED], p[kernels.P_SHOT_RATIO] = o.greed, o.analytic_ratio_m
         p[kernels.P_MAX_ROLL] = self.robot.max_roll_rad
         p[kernels.P_HOLD_WAIT] = self.budget(HOLD_EXPANSIONS)

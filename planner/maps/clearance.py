@@ -328,11 +328,12 @@ def _least_distance(blocked: np.ndarray, ox: float, oy: float, res: float, poses
     measured within its bound + LEAST_SEED_M first (a 2 m reach scans 10–20 times the cells): when it is nearer
     than that, its distance is exact and bounds the least, else it is measured again with the full reach."""
     best = reach_m
+    turn = convex_turn(px, py)
     if order.size:
         k = order[0]
         near = max(lower_m[k], 0.0) + LEAST_SEED_M
         if near < reach_m:
-            d = footprint_distance(blocked, ox, oy, res, poses[k, 0], poses[k, 1], poses[k, 2], px, py, near)
+            d = footprint_distance(blocked, ox, oy, res, poses[k, 0], poses[k, 1], poses[k, 2], px, py, near, turn)
             if d < near:
                 best = d
     for k in order:
@@ -341,7 +342,7 @@ def _least_distance(blocked: np.ndarray, ox: float, oy: float, res: float, poses
         if lower_m[k] > 0.0:  # apart from every blocked cell: no overlap test
             d = _free_distance(blocked, ox, oy, res, poses[k, 0], poses[k, 1], poses[k, 2], px, py, best)
         else:
-            d = footprint_distance(blocked, ox, oy, res, poses[k, 0], poses[k, 1], poses[k, 2], px, py, best)
+            d = footprint_distance(blocked, ox, oy, res, poses[k, 0], poses[k, 1], poses[k, 2], px, py, best, turn)
         best = min(best, d)
         if best <= 0.0:
             break
@@ -484,14 +485,15 @@ def _square_meets_convex(cx: float, cy: float, half: float, c: float, s: float, 
 @njit_leaf
 def footprint_hits(
     blocked: np.ndarray, ox: float, oy: float, res: float, x: float, y: float, yaw: float,
-    px: np.ndarray, py: np.ndarray,
+    px: np.ndarray, py: np.ndarray, turn: int = 2,
 ) -> bool:
     """Does the footprint polygon (body frame px, py) at pose (x, y, yaw) meet a blocked cell or leave the map?
 
     Exact for square cells: a blocked cell meets the polygon when its centre is inside it or one of its
     edges crosses the cell; for a convex polygon (every footprint in robots/ so far) when no edge of the polygon
     separates it (:func:`_square_meets_convex`, the same answer without the even-odd rule and the sixteen clipped
-    edges). ``blocked`` is the (height, width) boolean grid.
+    edges). ``turn`` is :func:`convex_turn` of the polygon when the caller has it (it costs about 70 ns, a fifth of a
+    call near a wall); 2 works it out here. ``blocked`` is the (height, width) boolean grid.
 
     The search calls this wherever the covering circles touch an obstacle, millions of times per plan batch,
     and there the polygon almost never does: a blocked cell of the bounding box farther from the pose than the
@@ -519,7 +521,6 @@ def footprint_hits(
     if ix0 < 0 or iy0 < 0 or ix1 >= w or iy1 >= h:
         return True
     reach2 = (math.sqrt(reach2) + 1e-9) ** 2
-    turn = 2  # convex_turn(px, py), once needed
     for iy in range(iy0, iy1 + 1):
         by0 = oy + iy * res
         gy = max(by0 - y, 0.0, y - by0 - res)
@@ -536,7 +537,7 @@ def footprint_hits(
             # search's compiled sweeps call this without reference counting)
             dx = bx0 + 0.5 * res - x
             dy = by0 + 0.5 * res - y
-            if turn == 2:  # (worked out at the first blocked cell within reach)
+            if turn == 2:  # (not given: worked out at the first blocked cell within reach)
                 turn = convex_turn(px, py)
             if turn != 0:
                 if _square_meets_convex(c * dx + s * dy, -s * dx + c * dy, 0.5 * res, c, s, px, py, turn):
@@ -557,9 +558,9 @@ def footprint_hits(
 @njit(cache=True)
 def footprint_margin(
     clear: np.ndarray, blocked: np.ndarray, ox: float, oy: float, res: float, x: float, y: float, yaw: float,
-    offx: np.ndarray, offy: np.ndarray, r_c: float, px: np.ndarray, py: np.ndarray,
+    offx: np.ndarray, offy: np.ndarray, r_c: float, px: np.ndarray, py: np.ndarray, turn: int = 2,
 ) -> float:
-    """Free-space margin (m) of the footprint at one pose: ≥ 0 means free.
+    """Free-space margin (m) of the footprint at one pose: ≥ 0 means free (``turn`` as :func:`footprint_hits`).
 
     The covering circles' margin when they are clear of every obstacle (a lower bound of the polygon's
     clearance); otherwise the polygon decides: 0.0 when it fits, the (negative) circle margin when it hits.
@@ -567,7 +568,7 @@ def footprint_margin(
     m = circle_margin(clear, ox, oy, res, x, y, yaw, offx, offy, r_c)
     if m >= 0.0:
         return m
-    if footprint_hits(blocked, ox, oy, res, x, y, yaw, px, py):
+    if footprint_hits(blocked, ox, oy, res, x, y, yaw, px, py, turn):
         return m if m > -1e9 else -1e9
     return 0.0
 
@@ -578,9 +579,10 @@ def _footprint_margins(
     offx: np.ndarray, offy: np.ndarray, r_c: float, px: np.ndarray, py: np.ndarray,
 ) -> np.ndarray:
     out = np.empty(poses.shape[0])
+    turn = convex_turn(px, py)
     for k in range(poses.shape[0]):
         out[k] = footprint_margin(clear, blocked, ox, oy, res, poses[k, 0], poses[k, 1], poses[k, 2],
-                                   offx, offy, r_c, px, py)
+                                   offx, offy, r_c, px, py, turn)
     return out
 
 
@@ -595,13 +597,13 @@ def _point_segment(x: float, y: float, ax: float, ay: float, bx: float, by: floa
 @njit(cache=True)
 def footprint_distance(
     blocked: np.ndarray, ox: float, oy: float, res: float, x: float, y: float, yaw: float,
-    px: np.ndarray, py: np.ndarray, reach_m: float,
+    px: np.ndarray, py: np.ndarray, reach_m: float, turn: int = 2,
 ) -> float:
     """Exact distance (m) from the footprint polygon at (x, y, yaw) to the nearest blocked cell square or the
-    map's edge, capped at ``reach_m``; 0 when they meet. Between two disjoint polygons the closest pair is a
-    vertex of one and an edge of the other, so polygon vertices are measured to each cell square and cell
-    corners to each polygon edge."""
-    if footprint_hits(blocked, ox, oy, res, x, y, yaw, px, py):
+    map's edge, capped at ``reach_m``; 0 when they meet (``turn`` as :func:`footprint_hits`). Between two disjoint
+    polygons the closest pair is a vertex of one and an edge of the other, so polygon vertices are measured to each
+    cell square and cell corners to each polygon edge."""
+    if footprint_hits(blocked, ox, oy, res, x, y, yaw, px, py, turn):
         return 0.0
     return _free_distance(blocked, ox, oy, res, x, y, yaw, px, py, reach_m)
 
@@ -665,8 +667,10 @@ def _free_distance(
 def _distances(blocked: np.ndarray, ox: float, oy: float, res: float, poses: np.ndarray,
                px: np.ndarray, py: np.ndarray, reach_m: float) -> np.ndarray:
     out = np.empty(poses.shape[0])
+    turn = convex_turn(px, py)
     for k in range(poses.shape[0]):
-        out[k] = footprint_distance(blocked, ox, oy, res, poses[k, 0], poses[k, 1], poses[k, 2], px, py, reach_m)
+        out[k] = footprint_distance(blocked, ox, oy, res, poses[k, 0], poses[k, 1], poses[k, 2], px, py, reach_m,
+                                    turn)
     return out
 
 

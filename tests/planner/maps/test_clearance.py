@@ -251,10 +251,12 @@ def test_compiled_footprint_tests_give_the_plain_tests_answers(robot: RobotProfi
     poses[:500, :2] = np.round(poses[:500, :2] / grid.resolution_m) * grid.resolution_m  # on cell corners
     poses[:500, 2] = rng.choice([0.0, math.pi / 2, math.pi, -math.pi / 2], 500)
     args = (clear.blocked, clear.origin_x, clear.origin_y, clear.resolution_m)
+    turn = convex_turn(px, py)
     hits = 0
     for x, y, yaw in poses:
         fast = footprint_hits_compiled(*args, x, y, yaw, px, py)
         assert fast == _hits_every_cell(*args, x, y, yaw, px, py), (x, y, yaw)
+        assert footprint_hits_compiled(*args, x, y, yaw, px, py, turn) == fast  # the convexity given, as the search
         hits += fast
     assert 0.1 * len(poses) < hits < 0.9 * len(poses)  # both answers are well represented
     dist = clear.footprint_distances(poly, poses[:1500], reach_m=1.0)
