@@ -116,7 +116,9 @@ def _wavefront16(mult: np.ndarray, gx: int, gy: int, cell_m: float, sx: int, sy:
     in any order, so a cell may be reached more cheaply after it was expanded: it is then queued and expanded again
     (label-correcting), and a cell's value is taken as the smaller of its cost found and B − e, so the table
     never exceeds the true cost. Work (pops, pushes, neighbour looks) is in proportion to the cells expanded;
-    the grid as a whole is only allocated and filled."""
+    the grid as a whole is only allocated and filled (with a start: and given each cell's e, once, which the pushes
+    and the last pass read instead of working out a square root each; issue 21's seventeenth round, 8 % of the
+    wavefront's time)."""
     h, w = mult.shape
     n = h * w
     flat = mult.ravel()
@@ -150,6 +152,17 @@ def _wavefront16(mult: np.ndarray, gx: int, gy: int, cell_m: float, sx: int, sy:
     directed = 0 <= sx < w and 0 <= sy < h
     guided = directed and guide.shape == mult.shape
     to_start = guide.ravel()
+    # e(cell) once per cell (the key's lower bound; inf where the guide cannot reach the start), not once per push
+    low = np.zeros(n if directed else 0)
+    if directed:
+        for iy in range(h):
+            dy2 = float((iy - sy) * (iy - sy))
+            row = iy * w
+            for ix in range(w):
+                low[row + ix] = cell_m * math.sqrt(float((ix - sx) * (ix - sx)) + dy2)
+        if guided:
+            for i in range(n):
+                low[i] = max(low[i], to_start[i])
     width = cell_m / _BUCKETS_A_CELL
     inv = 1.0 / width
     mask = _RING - 1
@@ -164,9 +177,7 @@ def _wavefront16(mult: np.ndarray, gx: int, gy: int, cell_m: float, sx: int, sy:
     table[g] = 0.0
     ent_cell[0] = g
     ent_cost[0] = 0.0
-    ent_key[0] = cell_m * math.sqrt(float((gx - sx) ** 2 + (gy - sy) ** 2)) if directed else 0.0
-    if guided:
-        ent_key[0] = max(ent_key[0], to_start[g])
+    ent_key[0] = low[g] if directed else 0.0
     cur = int(ent_key[0] * inv)
     ent_next[0] = -1
     head[cur & mask] = 0
@@ -221,13 +232,9 @@ def _wavefront16(mult: np.ndarray, gx: int, gy: int, cell_m: float, sx: int, sy:
             if nd < table[nb] and flat[c + off_a[k]] < np.inf and flat[c + off_b[k]] < np.inf:
                 key = nd
                 if directed:
-                    ex = cx + _MOVES[k, 0] - sx
-                    ey = cy + _MOVES[k, 1] - sy
-                    lower = cell_m * math.sqrt(float(ex * ex + ey * ey))
-                    if guided:
-                        if not to_start[nb] < np.inf:  # no way from there to the start
-                            continue
-                        lower = max(lower, to_start[nb])
+                    lower = low[nb]
+                    if not lower < np.inf:  # (guided) no way from there to the start
+                        continue
                     key += lower
                 table[nb] = nd
                 b = min(max(int(key * inv), cur), cur + _RING - 1)
@@ -249,12 +256,7 @@ def _wavefront16(mult: np.ndarray, gx: int, gy: int, cell_m: float, sx: int, sy:
         if flat[i] < np.inf:
             v = table[i]
             if bound < math.inf:
-                iy = i // w
-                ix = i - iy * w
-                lower = cell_m * math.sqrt(float((ix - sx) ** 2 + (iy - sy) ** 2))
-                if guided:
-                    lower = max(lower, to_start[i])
-                v = min(v, bound - lower)
+                v = min(v, bound - low[i])
             if v < np.inf:
                 table[i] = max(v * scale - slack, 0.0)
     return table.reshape(h, w), counts, bound
