@@ -683,12 +683,13 @@ class HybridAStar:
                 extra.pop("forward_alternative", None)
         poses = self._densify(start, motions, o.state_spacing_m)
         fine = self._densify(start, motions, self.grid.resolution_m / 4)
-        margins = self.clearance.footprint_margins(self.footprint, self.polygon, fine[:, :3])
+        margins, measured = self.clearance.path_margins(self.footprint, self.polygon, fine[:, :3])
         if margins.min() < 0:
             raise NoValidPathFound("internal check failed: the exact re-check of the final path found a collision")
         # The circles' margin is a lower bound of the polygon's clearance: only poses whose bound could beat
         # the best exact distance found so far are measured exactly.
-        clearance_m = self.clearance.least_footprint_distance(self.polygon, fine[:, :3], margins, CLEARANCE_REACH_M)
+        clearance_m = self.clearance.least_footprint_distance(self.polygon, fine[:, :3], margins, CLEARANCE_REACH_M,
+                                                              self.footprint, measured)
         length = self._length(start, motions)
         # issue 21's measure of how directly the search heads for the goal: all searches' expansions per metre
         # (None for a path of no length: the result is sent as JSON, which has no NaN)
@@ -921,7 +922,7 @@ class HybridAStar:
                 or abs(wrap(float(end[2]) - goal[2])) > o.goal_tolerance_yaw_rad):
             return False
         fine = self._densify(start, motions, self.grid.resolution_m / 4)
-        return bool(self.clearance.footprint_margins(self.footprint, self.polygon, fine[:, :3]).min() >= 0)
+        return bool(self.clearance.path_margins(self.footprint, self.polygon, fine[:, :3])[0].min() >= 0)
 
     def _knots(self, start: Pose, motions: list[tuple[float, float, float]], roll: float = 0.0) -> np.ndarray:
         """Pose (x, y, yaw, roll) and distance travelled at the start and after every motion: (n+1, 5)."""

@@ -24,7 +24,9 @@ One name per meaning (every wing uses these words, and only these):
   :func:`footprint_hits`.
 * **footprint margin** (m, per pose): the two-tier answer — the circle margin where it is ≥ 0, else 0.0
   where the polygon fits and the (negative) circle margin where it hits; ≥ 0 means free. Kernel
-  :func:`footprint_margin`, many poses :meth:`ClearanceMap.footprint_margins`.
+  :func:`footprint_margin`, many poses :meth:`ClearanceMap.footprint_margins`, a path's consecutive poses
+  :meth:`ClearanceMap.path_margins` (measured where the path comes near, bounded from the last pose measured
+  elsewhere).
 * **footprint distance** (m, per pose): the exact distance from the polygon to the nearest blocked cell
   square or the map's edge, capped at a reach; 0 where they meet. Kernel :func:`footprint_distance`, many
   poses :meth:`ClearanceMap.footprint_distances`; the least over a path :meth:`ClearanceMap.least_footprint_distance`
@@ -298,6 +300,25 @@ class ClearanceMap:
                               footprint.offsets_x, footprint.offsets_y, footprint.radius_m,
                               np.ascontiguousarray(poly[:, 0]), np.ascontiguousarray(poly[:, 1]))
 
+    def path_margins(self, footprint: CircleFootprint, polygon: np.ndarray, poses: np.ndarray
+                     ) -> tuple[np.ndarray, np.ndarray]:
+        """The exact check of a path's consecutive poses (rows x, y, yaw), measuring only where it must: per pose
+        a lower bound of its footprint distance (≥ 0 free; < 0 only where the pose collides) and whether the pose
+        was measured.
+
+        A measured pose holds its footprint margin (:func:`footprint_margin`). After one with margin m > 0, the
+        next poses are not measured while every covering-circle centre has moved less than PATH_SKIP_SHARE × m
+        since (the step's length plus its turn × the farthest centre's offset, summed): such a pose holds m less
+        that movement, a lower bound of its true circle margin (the clearance is a lower bound of the distance and
+        a distance changes no faster than its point moves), so it is free. Where the path keeps room this
+        measures one pose in tens (issue 21's seventeenth round); the lower bounds serve
+        :meth:`least_footprint_distance` as the margins did, and its result is the same."""
+        poses = np.ascontiguousarray(np.atleast_2d(np.asarray(poses, float))[:, :3])
+        poly = np.asarray(polygon, float)
+        return _path_margins(self.clearance, self.blocked, self.origin_x, self.origin_y, self.resolution_m, poses,
+                             footprint.offsets_x, footprint.offsets_y, footprint.radius_m,
+                             np.ascontiguousarray(poly[:, 0]), np.ascontiguousarray(poly[:, 1]))
+
     def footprint_distances(self, polygon: np.ndarray, poses: np.ndarray, reach_m: float = 1.0) -> np.ndarray:
         """Per pose: the exact distance (m) from the footprint polygon to the nearest blocked cell square or
         the map's edge, capped at ``reach_m``; 0 where the polygon meets a blocked cell or leaves the map."""
@@ -307,45 +328,74 @@ class ClearanceMap:
                           np.ascontiguousarray(poly[:, 0]), np.ascontiguousarray(poly[:, 1]), reach_m)
 
     def least_footprint_distance(self, polygon: np.ndarray, poses: np.ndarray, lower_m: np.ndarray,
-                               reach_m: float = 1.0) -> float:
+                                 reach_m: float = 1.0, footprint: CircleFootprint | None = None,
+                                 measured: np.ndarray | None = None) -> float:
         """The smallest exact footprint distance over ``poses`` (capped at ``reach_m``), given a lower bound
         ``lower_m`` of each pose's distance (e.g. the covering circles' margin): poses are measured in order
-        of their bound, each only as far as the best found so far, until no bound can beat it."""
+        of their bound, each only as far as the best found so far, until no bound can beat it.
+
+        With ``footprint`` and ``measured`` (:meth:`path_margins`' flags), a pose whose bound was only derived
+        gets its footprint margin first, and is measured exactly only when that could still beat the best."""
         poses = np.ascontiguousarray(np.atleast_2d(np.asarray(poses, float))[:, :3])
         poly = np.asarray(polygon, float)
         px, py = np.ascontiguousarray(poly[:, 0]), np.ascontiguousarray(poly[:, 1])
         order = np.argsort(lower_m)
-        return float(_least_distance(self.blocked, self.origin_x, self.origin_y, self.resolution_m, poses,
-                                     np.ascontiguousarray(lower_m, dtype=float), order, px, py, reach_m))
+        lower = np.ascontiguousarray(lower_m, dtype=float)
+        if footprint is None or measured is None:
+            return float(_least_distance(self.blocked, self.origin_x, self.origin_y, self.resolution_m, poses, lower,
+                                         order, px, py, reach_m, self.clearance, _NO_OFFSETS, _NO_OFFSETS, 0.0,
+                                         _ALL_MEASURED))
+        return float(_least_distance(self.blocked, self.origin_x, self.origin_y, self.resolution_m, poses, lower,
+                                     order, px, py, reach_m, self.clearance, footprint.offsets_x,
+                                     footprint.offsets_y, footprint.radius_m, np.ascontiguousarray(measured)))
+
+
+_NO_OFFSETS = np.zeros(0)
+_ALL_MEASURED = np.zeros(0, dtype=np.bool_)
 
 
 @njit(cache=True)
 def _least_distance(blocked: np.ndarray, ox: float, oy: float, res: float, poses: np.ndarray, lower_m: np.ndarray,
-                    order: np.ndarray, px: np.ndarray, py: np.ndarray, reach_m: float) -> float:
+                    order: np.ndarray, px: np.ndarray, py: np.ndarray, reach_m: float, clear: np.ndarray,
+                    offx: np.ndarray, offy: np.ndarray, r_c: float, measured: np.ndarray) -> float:
     """:meth:`ClearanceMap.least_footprint_distance`'s loop, compiled (it ran in Python, a few ms per plan).
 
     The measure of a pose scans the cells within the best distance so far of its polygon; the first pose is
     measured within its bound + LEAST_SEED_M first (a 2 m reach scans 10–20 times the cells): when it is nearer
-    than that, its distance is exact and bounds the least, else it is measured again with the full reach."""
+    than that, its distance is exact and bounds the least, else it is measured again with the full reach.
+    ``measured`` (empty: all) marks the bounds that are footprint margins: those poses go first (the seed is the
+    first of them), and then those whose bound was only derived, each given its margin (circles ``offx``, ``offy``,
+    ``r_c`` on ``clear``) before any exact measure. Every pose is measured or bounded: the result is the same."""
     best = reach_m
     turn = convex_turn(px, py)
-    if order.size:
-        k = order[0]
+    derived = measured.size > 0
+    for k in order:
+        if derived and not measured[k]:
+            continue
         near = max(lower_m[k], 0.0) + LEAST_SEED_M
         if near < reach_m:
             d = footprint_distance(blocked, ox, oy, res, poses[k, 0], poses[k, 1], poses[k, 2], px, py, near, turn)
             if d < near:
                 best = d
-    for k in order:
-        if lower_m[k] >= best:
-            break
-        if lower_m[k] > 0.0:  # apart from every blocked cell: no overlap test
-            d = _free_distance(blocked, ox, oy, res, poses[k, 0], poses[k, 1], poses[k, 2], px, py, best)
-        else:
-            d = footprint_distance(blocked, ox, oy, res, poses[k, 0], poses[k, 1], poses[k, 2], px, py, best, turn)
-        best = min(best, d)
-        if best <= 0.0:
-            break
+        break
+    for phase in range(2 if derived else 1):
+        for k in order:
+            if lower_m[k] >= best:
+                break
+            if derived:
+                if measured[k] != (phase == 0):
+                    continue
+                if phase == 1 and footprint_margin(clear, blocked, ox, oy, res, poses[k, 0], poses[k, 1],
+                                                   poses[k, 2], offx, offy, r_c, px, py, turn) >= best:
+                    continue  # (the margin bounds the distance, as the derived bound did)
+            if lower_m[k] > 0.0:  # apart from every blocked cell: no overlap test
+                d = _free_distance(blocked, ox, oy, res, poses[k, 0], poses[k, 1], poses[k, 2], px, py, best, turn)
+            else:
+                d = footprint_distance(blocked, ox, oy, res, poses[k, 0], poses[k, 1], poses[k, 2], px, py, best,
+                                       turn)
+            best = min(best, d)
+            if best <= 0.0:
+                return best
     return best
 
 
@@ -573,6 +623,44 @@ def footprint_margin(
     return 0.0
 
 
+PATH_SKIP_SHARE = 0.5  # path_margins: poses after a measured one are bounded, not measured, while they move less
+
+
+@njit(cache=True)
+def _path_margins(
+    clear: np.ndarray, blocked: np.ndarray, ox: float, oy: float, res: float, poses: np.ndarray,
+    offx: np.ndarray, offy: np.ndarray, r_c: float, px: np.ndarray, py: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray]:
+    """:meth:`ClearanceMap.path_margins`' loop: per pose its footprint margin, or a lower bound of its footprint
+    distance derived from the last pose measured, and whether it was measured."""
+    n = poses.shape[0]
+    out = np.empty(n)
+    measured = np.zeros(n, dtype=np.bool_)
+    turn = convex_turn(px, py)
+    reach = 0.0  # the farthest covering-circle centre from the robot's centre
+    for k in range(offx.size):
+        reach = max(reach, math.hypot(offx[k], offy[k]))
+    k = 0
+    while k < n:
+        m = footprint_margin(clear, blocked, ox, oy, res, poses[k, 0], poses[k, 1], poses[k, 2], offx, offy, r_c,
+                             px, py, turn)
+        out[k] = m
+        measured[k] = True
+        k += 1
+        if not m > 0.0:
+            continue
+        moved = 0.0  # a bound of how far any circle centre has moved since the pose measured
+        while k < n:
+            turned = abs(poses[k, 2] - poses[k - 1, 2]) % (2.0 * math.pi)
+            moved += math.hypot(poses[k, 0] - poses[k - 1, 0], poses[k, 1] - poses[k - 1, 1]) + reach * min(
+                turned, 2.0 * math.pi - turned)
+            if moved >= PATH_SKIP_SHARE * m:
+                break
+            out[k] = m - moved - 1e-9
+            k += 1
+    return out, measured
+
+
 @njit(cache=True)
 def _footprint_margins(
     clear: np.ndarray, blocked: np.ndarray, ox: float, oy: float, res: float, poses: np.ndarray,
@@ -605,18 +693,27 @@ def footprint_distance(
     cell square and cell corners to each polygon edge."""
     if footprint_hits(blocked, ox, oy, res, x, y, yaw, px, py, turn):
         return 0.0
-    return _free_distance(blocked, ox, oy, res, x, y, yaw, px, py, reach_m)
+    return _free_distance(blocked, ox, oy, res, x, y, yaw, px, py, reach_m, turn)
 
 
 @njit(cache=True)
 def _free_distance(
     blocked: np.ndarray, ox: float, oy: float, res: float, x: float, y: float, yaw: float,
-    px: np.ndarray, py: np.ndarray, reach_m: float,
+    px: np.ndarray, py: np.ndarray, reach_m: float, turn: int = 2,
 ) -> float:
-    """:func:`footprint_distance` of a pose known not to meet a blocked cell (nor to leave the map)."""
+    """:func:`footprint_distance` of a pose known not to meet a blocked cell (nor to leave the map); ``turn`` as
+    :func:`footprint_hits` (2: worked out here).
+
+    Candidates that cannot beat the best distance so far are not measured (issue 21's seventeenth round; the
+    distance is the same): a polygon vertex whose gap to the cell along x or y is already no shorter; a cell
+    corner no nearer to (x, y) than the best + the polygon's reach; and, for a convex polygon, an edge with the
+    corner on its inner side (for a point outside a convex polygon some edge nearest to it has the point on its
+    outer side: at a nearest vertex, one of its two edges does)."""
     wx, wy = _placed(x, y, yaw, px, py)
     n = px.size
     h, w = blocked.shape
+    if turn == 2:
+        turn = convex_turn(px, py)
     best = reach_m
     r_out = 0.0  # every point of the polygon lies within r_out of (x, y)
     for i in range(n):  # the map's edge
@@ -648,14 +745,22 @@ def _free_distance(
             for i in range(n):
                 gx = max(bx0 - wx[i], 0.0, wx[i] - bx0 - res)
                 gy = max(by0 - wy[i], 0.0, wy[i] - by0 - res)
+                if gx >= best or gy >= best:  # (the distance is at least either gap)
+                    continue
                 d = math.hypot(gx, gy)
                 if d < best:
                     best = d
             for corner in range(4):
                 cx = bx0 + res * (corner & 1)
                 cy = by0 + res * (corner >> 1)
+                if math.hypot(cx - x, cy - y) - r_out > best + 1e-9:
+                    continue
                 j = n - 1
                 for i in range(n):
+                    # (the edge j -> i has the polygon on its left when turn is 1, on its right when −1)
+                    if turn != 0 and turn * ((wx[i] - wx[j]) * (cy - wy[j]) - (wy[i] - wy[j]) * (cx - wx[j])) > 0.0:
+                        j = i
+                        continue
                     d = _point_segment(cx, cy, wx[j], wy[j], wx[i], wy[i])
                     if d < best:
                         best = d

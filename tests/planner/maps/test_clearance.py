@@ -3,6 +3,7 @@ cells and the exact footprint clearance, each checked against an independent raw
 
 import itertools
 import math
+import types
 
 import numpy as np
 import pytest
@@ -309,3 +310,72 @@ def test_a_footprint_that_is_not_convex_gets_the_plain_tests_answer(poly: np.nda
         assert fast == _hits_every_cell(*args, x, y, yaw, px, py), (x, y, yaw)
         answers.add(fast)
     assert answers == {True, False}
+
+
+@pytest.mark.parametrize("poly", [_box_robot(0.3, 0.2, 0.02).footprint_polygon[::-1], _L_SHAPE, _L_SHAPE[::-1]],
+                         ids=["box clockwise", "L", "L clockwise"])
+def test_exact_footprint_distance_of_any_winding_agrees_with_brute_force(poly: np.ndarray) -> None:
+    """The distance skips the edges a cell corner lies inside of only for a convex polygon, by its winding: a
+    clockwise box and an L (which skips none) measure as the brute force does."""
+    occ = np.zeros((100, 100), bool)
+    occ[40:45, 30:70] = True
+    occ[60:90, 62:64] = True
+    grid = OccupancyGrid.from_occupied(occ, 0.05)
+    clear = ClearanceMap(grid)
+    shape = types.SimpleNamespace(footprint_polygon=np.asarray(poly, float))
+    rng = np.random.default_rng(11)
+    poses = np.column_stack([rng.uniform(0.5, 4.5, 40), rng.uniform(0.5, 4.5, 40), rng.uniform(-3.2, 3.2, 40)])
+    fast = clear.footprint_distances(poly, poses, reach_m=1.0)
+    assert 0.05 < np.median(fast) < 1.0
+    for pose, d in zip(poses, fast, strict=True):
+        assert d == pytest.approx(footprint_distance(grid, shape, pose[None], reach_m=1.0), abs=1e-9)
+
+
+def _turning_path(x0: float, y0: float, yaw0: float, n: int, step: float, curvature: float) -> np.ndarray:
+    """Poses ``step`` apart along an arc (rows x, y, yaw), the last ones turning on the spot."""
+    poses = np.empty((n, 3))
+    x, y, yaw = x0, y0, yaw0
+    for k in range(n):
+        poses[k] = x, y, yaw
+        if k < n - 20:
+            x, y = x + step * math.cos(yaw), y + step * math.sin(yaw)
+            yaw += curvature * step
+        else:
+            yaw += 0.05
+    return poses
+
+
+def test_path_margins_measure_where_they_must_and_bound_the_rest() -> None:
+    """The exact check of a path: measured poses hold their footprint margin, the others a lower bound of their
+    footprint distance, above 0; a pose that collides is always found; the least distance is the same."""
+    robot = _box_robot(0.6, 0.2, 0.02)  # three covering circles: turning moves the outer ones
+    fp = CircleFootprint.for_robot(robot)
+    assert fp.offsets_x.size > 1
+    occ = np.zeros((160, 160), bool)
+    occ[70:74, 20:140] = True  # a wall along y = 3.5 m
+    clear = ClearanceMap(OccupancyGrid.from_occupied(occ, 0.05))
+    poly = robot.footprint_polygon
+    for path in (_turning_path(1.0, 1.0, 0.3, 400, 0.0125, 0.4), _turning_path(1.5, 6.0, -0.2, 300, 0.0125, -0.3),
+                 _turning_path(2.0, 2.6, 0.0, 300, 0.0125, 0.0)):
+        margins, measured = clear.path_margins(fp, poly, path)
+        every = clear.footprint_margins(fp, poly, path)
+        exact = clear.footprint_distances(poly, path, reach_m=2.0)
+        assert np.array_equal(margins[measured], every[measured])
+        assert np.all(margins[~measured] > 0.0)
+        assert np.all(margins <= exact + 1e-9)  # a lower bound everywhere (turning included)
+        assert (margins.min() < 0) == (every.min() < 0)
+        assert clear.least_footprint_distance(poly, path, margins, 2.0, fp, measured) == pytest.approx(
+            clear.least_footprint_distance(poly, path, every, 2.0), abs=1e-12)
+    # heading for the wall: the nearest pose is one only bounded, and the least distance still finds it
+    towards = np.column_stack([np.full(81, 2.0), np.linspace(1.5, 2.5, 81), np.full(81, math.pi / 2)])
+    margins, measured = clear.path_margins(fp, poly, towards)
+    exact = clear.footprint_distances(poly, towards, reach_m=2.0)
+    assert not measured[np.argmin(exact)]
+    assert clear.least_footprint_distance(poly, towards, margins, 2.0, fp, measured) == pytest.approx(
+        exact.min(), abs=1e-12)
+    # in the open most poses are bounded, not measured; into the wall the collision is found
+    open_path = _turning_path(2.0, 5.5, 0.0, 300, 0.0125, 0.0)
+    assert clear.path_margins(fp, poly, open_path)[1].mean() < 0.1
+    into = _turning_path(2.0, 2.0, math.pi / 2, 200, 0.0125, 0.0)
+    assert clear.footprint_margins(fp, poly, into).min() < 0
+    assert clear.path_margins(fp, poly, into)[0].min() < 0
