@@ -174,12 +174,13 @@ class RobotProfile:
         base = self.footprint or ellipse_footprint(self.footprint_length_m, self.footprint_width_m)
         return pad_footprint(np.array(base, float), self.footprint_padding_m)
 
-    @property
+    @cached_property
     def max_curvature(self) -> float:
-        """Largest curvature (1/m) the robot can hold, at ``max_roll_rad``."""
+        """Largest curvature (1/m) the robot can hold, at ``max_roll_rad`` (the profile is frozen: worked out once,
+        it was asked for a few times a plan)."""
         return abs(float(self.roll_model.curvature(self.max_roll_rad)))
 
-    @property
+    @cached_property
     def min_turning_radius_m(self) -> float:
         return 1.0 / self.max_curvature
 

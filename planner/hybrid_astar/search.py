@@ -37,6 +37,7 @@ import time
 from collections import OrderedDict
 from collections.abc import Mapping
 from dataclasses import dataclass, fields
+from functools import cached_property
 from typing import Any
 
 import numpy as np
@@ -317,7 +318,7 @@ class _Search:
         p[kernels.P_BACK_SHARE] = FORWARD_RETRY_SHARE
         p[kernels.P_BOUND] = math.inf
         self.p = p
-        self.turns = kernels.child_turns(planner.curvatures, p)
+        self.turns = planner.child_turns(p)
         grid = planner.grid
         n_keys = grid.width * grid.height * o.n_yaw_bins * planner.n_roll_bins
         cap = 1 << 16
@@ -454,6 +455,7 @@ class HybridAStar:
         #: closed-set bitsets of finished searches, cleared, for the next ones (closed_set.BitsetPool)
         self.bitset_pool = closed_set.BitsetPool()
         self._base_params: dict[tuple[bool, PlannerOptions], np.ndarray] = {}  # _params without the goal
+        self._child_turns: dict[tuple[float, float], np.ndarray] = {}  # child_turns per (step, long steps)
         self._heuristics: OrderedDict[tuple[int, int], HolonomicHeuristic] = OrderedDict()
         self.holonomic_mult = coarse_cost_grid(self.clearance.clearance, self.centre_threshold_m,
                                                self.footprint.radius_m,
@@ -494,9 +496,10 @@ class HybridAStar:
         """Drop the cached holonomic tables (after a map change, or to time a plan as the first towards its goal)."""
         self._heuristics.clear()
 
-    @property
+    @cached_property
     def resolved_step_m(self) -> float:
-        """Arc length of one expansion: the option, or max(cell diagonal, R_min × yaw bin)."""
+        """Arc length of one expansion: the option, or max(cell diagonal, R_min × yaw bin) (a planner's options,
+        grid and robot do not change: worked out once)."""
         if self.options.step_m > 0:
             return max(self.options.step_m, math.sqrt(2) * self.grid.resolution_m)
         yaw_bin = 2 * math.pi / self.options.n_yaw_bins
@@ -518,6 +521,15 @@ class HybridAStar:
         per_expansion = self.options.n_rolls * (2 if self.reverse else 1) * (
             self.resolved_step_m / (0.5 * self.grid.resolution_m) + 1)
         return max(1, min(o.chunk_expansions, int(CHUNK_SAMPLES / per_expansion)))
+
+    def child_turns(self, p: np.ndarray) -> np.ndarray:
+        """:func:`kernels.child_turns` for a search's parameters, kept per step and long-step count (a planner's
+        held curvatures are fixed; it cost 40 µs a search)."""
+        key = (float(p[kernels.P_STEP]), float(p[kernels.P_LONG]))
+        turns = self._child_turns.get(key)
+        if turns is None:
+            turns = self._child_turns[key] = kernels.child_turns(self.curvatures, p)  # (shared: never written)
+        return turns
 
     def footprint_margin(self, pose: Pose) -> float:
         """Footprint margin (m) at a pose: ≥ 0 means free (circles first, the exact polygon where they touch)."""

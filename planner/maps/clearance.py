@@ -339,64 +339,67 @@ class ClearanceMap:
         poses = np.ascontiguousarray(np.atleast_2d(np.asarray(poses, float))[:, :3])
         poly = np.asarray(polygon, float)
         px, py = np.ascontiguousarray(poly[:, 0]), np.ascontiguousarray(poly[:, 1])
-        order = np.argsort(lower_m)
         lower = np.ascontiguousarray(lower_m, dtype=float)
         if footprint is None or measured is None:
             return float(_least_distance(self.blocked, self.origin_x, self.origin_y, self.resolution_m, poses, lower,
-                                         order, px, py, reach_m, self.clearance, _NO_OFFSETS, _NO_OFFSETS, 0.0,
-                                         _ALL_MEASURED))
+                                         np.argsort(lower), px, py, reach_m, self.clearance, _NO_OFFSETS,
+                                         _NO_OFFSETS, 0.0, _NO_POSES))
+        first = np.flatnonzero(measured)
         return float(_least_distance(self.blocked, self.origin_x, self.origin_y, self.resolution_m, poses, lower,
-                                     order, px, py, reach_m, self.clearance, footprint.offsets_x,
-                                     footprint.offsets_y, footprint.radius_m, np.ascontiguousarray(measured)))
+                                     first[np.argsort(lower[first])], px, py, reach_m, self.clearance,
+                                     footprint.offsets_x, footprint.offsets_y, footprint.radius_m,
+                                     np.flatnonzero(~np.asarray(measured, dtype=bool))))
 
 
 _NO_OFFSETS = np.zeros(0)
-_ALL_MEASURED = np.zeros(0, dtype=np.bool_)
+_NO_POSES = np.zeros(0, dtype=np.int64)
 
 
 @njit(cache=True)
 def _least_distance(blocked: np.ndarray, ox: float, oy: float, res: float, poses: np.ndarray, lower_m: np.ndarray,
                     order: np.ndarray, px: np.ndarray, py: np.ndarray, reach_m: float, clear: np.ndarray,
-                    offx: np.ndarray, offy: np.ndarray, r_c: float, measured: np.ndarray) -> float:
+                    offx: np.ndarray, offy: np.ndarray, r_c: float, rest: np.ndarray) -> float:
     """:meth:`ClearanceMap.least_footprint_distance`'s loop, compiled (it ran in Python, a few ms per plan).
 
-    The measure of a pose scans the cells within the best distance so far of its polygon; the first pose is
-    measured within its bound + LEAST_SEED_M first (a 2 m reach scans 10–20 times the cells): when it is nearer
-    than that, its distance is exact and bounds the least, else it is measured again with the full reach.
-    ``measured`` (empty: all) marks the bounds that are footprint margins: those poses go first (the seed is the
-    first of them), and then those whose bound was only derived, each given its margin (circles ``offx``, ``offy``,
-    ``r_c`` on ``clear``) before any exact measure. Every pose is measured or bounded: the result is the same."""
+    The poses ``order`` (in order of their bound) are measured first. The measure of a pose scans the cells within
+    the best distance so far of its polygon; the first pose is measured within its bound + LEAST_SEED_M first (a 2 m
+    reach scans 10–20 times the cells): when it is nearer than that, its distance is exact and bounds the least,
+    else it is measured again with the full reach. The poses ``rest`` (in any order; those whose bound was only
+    derived) come after: each below the best is given its footprint margin (circles ``offx``, ``offy``, ``r_c`` on
+    ``clear``) and measured only when that is below the best too. Every pose is measured or bounded: the least is
+    exact either way."""
     best = reach_m
     turn = convex_turn(px, py)
-    derived = measured.size > 0
-    for k in order:
-        if derived and not measured[k]:
-            continue
+    if order.size:
+        k = order[0]
         near = max(lower_m[k], 0.0) + LEAST_SEED_M
         if near < reach_m:
             d = footprint_distance(blocked, ox, oy, res, poses[k, 0], poses[k, 1], poses[k, 2], px, py, near, turn)
             if d < near:
                 best = d
-        break
-    for phase in range(2 if derived else 1):
-        for k in order:
-            if lower_m[k] >= best:
-                break
-            if derived:
-                if measured[k] != (phase == 0):
-                    continue
-                if phase == 1 and footprint_margin(clear, blocked, ox, oy, res, poses[k, 0], poses[k, 1],
-                                                   poses[k, 2], offx, offy, r_c, px, py, turn) >= best:
-                    continue  # (the margin bounds the distance, as the derived bound did)
-            if lower_m[k] > 0.0:  # apart from every blocked cell: no overlap test
-                d = _free_distance(blocked, ox, oy, res, poses[k, 0], poses[k, 1], poses[k, 2], px, py, best, turn)
-            else:
-                d = footprint_distance(blocked, ox, oy, res, poses[k, 0], poses[k, 1], poses[k, 2], px, py, best,
-                                       turn)
-            best = min(best, d)
-            if best <= 0.0:
-                return best
+    for k in order:
+        if lower_m[k] >= best:
+            break
+        best = min(best, _measure(blocked, ox, oy, res, poses, lower_m, k, px, py, best, turn))
+        if best <= 0.0:
+            return best
+    for k in rest:
+        if lower_m[k] >= best or footprint_margin(clear, blocked, ox, oy, res, poses[k, 0], poses[k, 1], poses[k, 2],
+                                                  offx, offy, r_c, px, py, turn) >= best:
+            continue  # (the margin bounds the distance, as the derived bound did)
+        best = min(best, _measure(blocked, ox, oy, res, poses, lower_m, k, px, py, best, turn))
+        if best <= 0.0:
+            return best
     return best
+
+
+@njit(cache=True)
+def _measure(blocked: np.ndarray, ox: float, oy: float, res: float, poses: np.ndarray, lower_m: np.ndarray, k: int,
+             px: np.ndarray, py: np.ndarray, best: float, turn: int) -> float:
+    """Pose ``k``'s footprint distance within ``best`` (no overlap test where its bound is above 0)."""
+    if lower_m[k] > 0.0:
+        return _free_distance(blocked, ox, oy, res, poses[k, 0], poses[k, 1], poses[k, 2], px, py, best, turn)
+    return footprint_distance(blocked, ox, oy, res, poses[k, 0], poses[k, 1], poses[k, 2], px, py, best, turn)
 
 
 def _polygon_samples(poly: np.ndarray, spacing_m: float) -> np.ndarray:

@@ -115,3 +115,18 @@ def test_the_search_is_given_its_footprints_convexity_once() -> None:
     n = int(run.counters[kernels.C_NODES])
     assert n > 100 and n == int(plain.counters[kernels.C_NODES])
     assert np.array_equal(run.node_f[:n], plain.node_f[:n])
+
+
+def test_the_childrens_turns_are_worked_out_once_per_step_and_long_step() -> None:
+    """A planner keeps kernels.child_turns per (step, long-step count): a search with other values gets its own,
+    the same values get the same array, and every one is what child_turns gives."""
+    planner = HybridAStar(_rooms(), ROBOT, PlannerOptions())
+    p = planner._params((10.5, 6.0, math.pi / 2), True)
+    longer, shorter = p.copy(), p.copy()
+    longer[kernels.P_LONG] = p[kernels.P_LONG] + 2.0
+    shorter[kernels.P_STEP] = 0.5 * p[kernels.P_STEP]
+    got = [planner.child_turns(q) for q in (p, longer, shorter)]
+    for q, turns in zip((p, longer, shorter), got, strict=True):
+        assert np.array_equal(turns, kernels.child_turns(planner.curvatures, q))
+    assert not np.array_equal(got[0], got[1]) and not np.array_equal(got[0], got[2])
+    assert planner.child_turns(p.copy()) is got[0]
