@@ -403,6 +403,27 @@ def test_a_repeat_that_runs_out_of_time_is_counted_not_fatal(monkeypatch: pytest
     assert len(calls) == 3 and rec.solved and rec.status == "solved"
 
 
+def test_the_search_loops_time_is_the_median_of_the_repeats_as_the_time_is(monkeypatch: pytest.MonkeyPatch) -> None:
+    """With --repeat, search_loop_s (the bench's loop exp/s) is the median of the runs' loop times, as time_s is the
+    median of their times: not the first run's alone, which follows the reference planner's run."""
+    from lab.planning.real import runs
+
+    loops = iter([0.5, 0.1, 0.2])
+    real_plan = runs.plan_path
+
+    def timed(*args, **kwargs):
+        result = real_plan(*args, **kwargs)
+        result.extra["search_loop_time_s"] = next(loops)
+        return result
+
+    monkeypatch.setattr(runs, "plan_path", timed)
+    checker = FootprintReferee.for_robot(SMOOTHERS, ROBOT)
+    problem = draw_problems(SMOOTHERS, ROBOT, 1, np.random.default_rng(4), map_name="smoothers_world",
+                            checker=checker)[0]
+    rec = runs.run_sphereplan(problem, SMOOTHERS, ROBOT, checker, runs.PlannerOptions(), 5.0, repeat=3)
+    assert rec.solved and rec.search_loop_s == 0.2
+
+
 def test_the_shift_of_held_rolls_counts_every_change_from_upright_and_back() -> None:
     from lab.planning.real import runs
 
