@@ -24,7 +24,7 @@ from planner.hybrid_astar.reeds_shepp import MAX_SEGS as RS_MAX_SEGS
 from planner.hybrid_astar.reeds_shepp import MAX_SHOT_M, rs_best, rs_ranked
 from planner.jit import njit_leaf
 from planner.kinematics import STRAIGHT_EPS, arc_step, roll_shift, roll_shift_cs, wrap
-from planner.maps.clearance import circle_margin_at, footprint_hits
+from planner.maps.clearance import circle_margin_at, circles_clear_at, footprint_hits
 
 RUNNING, FOUND, EXHAUSTED, FULL = 0, 1, 2, 3
 SHOT_DUBINS, SHOT_WEIGHTED, SHOT_SHORTEST, SHOT_SECOND, SHOT_THIRD = 0, 1, 2, 3, 4  # analytic shot kinds (try_shot)
@@ -93,6 +93,8 @@ def _pose_margin_at(
     h, w = clear.shape
     if 0 <= ix < w and 0 <= iy < h and clear[iy, ix] < p[P_REJECT]:
         return hit
+    if circles_clear_at(clear, ox, oy, res, x, y, c, s, offx, offy, p[P_RC]):
+        return 0.0  # (what the polygon test answers there)
     if footprint_hits(blocked, ox, oy, res, x, y, yaw, px, py, int(p[P_CONVEX])):
         return hit
     return 0.0

@@ -618,9 +618,12 @@ def footprint_margin(
     The covering circles' margin when they are clear of every obstacle (a lower bound of the polygon's
     clearance); otherwise the polygon decides: 0.0 when it fits, the (negative) circle margin when it hits.
     """
-    m = circle_margin(clear, ox, oy, res, x, y, yaw, offx, offy, r_c)
+    c, s = math.cos(yaw), math.sin(yaw)
+    m = circle_margin_at(clear, ox, oy, res, x, y, c, s, offx, offy, r_c)
     if m >= 0.0:
         return m
+    if circles_clear_at(clear, ox, oy, res, x, y, c, s, offx, offy, r_c):
+        return 0.0  # (what the polygon test answers there)
     if footprint_hits(blocked, ox, oy, res, x, y, yaw, px, py, turn):
         return m if m > -1e9 else -1e9
     return 0.0
@@ -822,6 +825,30 @@ def circle_margin_at(
         if m < best:
             best = m
     return best
+
+
+@njit_leaf
+def circles_clear_at(
+    clear: np.ndarray, ox: float, oy: float, res: float, x: float, y: float, c: float, s: float,
+    offx: np.ndarray, offy: np.ndarray, r_c: float,
+) -> bool:
+    """Every covering circle is proven clear from where its centre q lies in its cell: the stored clearance is the
+    centre-to-centre distance d less √2·res, the nearest blocked square is at least d − res/√2 from the cell's
+    centre, so q is at least clearance + res/√2 − |q − cell centre| from every blocked square. Where the circle
+    margin (which takes the worst point of the cell) says "maybe", this proves a quarter to a third of the poses
+    near a wall free without the polygon test (issue 21's seventeenth round)."""
+    h, w = clear.shape
+    half_diagonal = res * math.sqrt(0.5)
+    for k in range(offx.size):
+        fx = (x + c * offx[k] - s * offy[k] - ox) / res
+        fy = (y + s * offx[k] + c * offy[k] - oy) / res
+        ix = int(math.floor(fx))
+        iy = int(math.floor(fy))
+        if ix < 0 or iy < 0 or ix >= w or iy >= h:
+            return False
+        if clear[iy, ix] + half_diagonal - res * math.hypot(fx - ix - 0.5, fy - iy - 0.5) < r_c + 1e-9:
+            return False
+    return True
 
 
 def least_footprint_distance(grid: OccupancyGrid, robot: RobotProfile, poses: np.ndarray,

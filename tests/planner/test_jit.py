@@ -12,7 +12,7 @@ from planner.maps import clearance
 HOT = [heap.heap_push, heap.heap_pop, closed_set.contains, closed_set.add, kernels._closed_key, kernels._heuristic,
        kernels._travel, kernels._pose_margin_at, kernels._shift_margin_at, kernels._arc_margin_at,
        kernels._motion_margin, clearance.circle_margin_at, clearance.footprint_hits, wrap, roll_shift, roll_shift_cs,
-       arc_step, clearance.convex_turn, clearance._square_meets_convex]
+       arc_step, clearance.convex_turn, clearance._square_meets_convex, clearance.circles_clear_at]
 
 
 @pytest.mark.parametrize("fn", HOT, ids=lambda f: f.py_func.__name__)

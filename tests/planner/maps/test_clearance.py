@@ -379,3 +379,37 @@ def test_path_margins_measure_where_they_must_and_bound_the_rest() -> None:
     into = _turning_path(2.0, 2.0, math.pi / 2, 200, 0.0125, 0.0)
     assert clear.footprint_margins(fp, poly, into).min() < 0
     assert clear.path_margins(fp, poly, into)[0].min() < 0
+
+
+@pytest.mark.parametrize("robot", [load_robot("zju-60"), _box_robot(0.6, 0.2, 0.02)], ids=["zju-60", "box"])
+def test_circles_proven_clear_within_their_cells_are_clear(robot: RobotProfile) -> None:
+    """circles_clear_at proves a pose free from where each circle's centre lies in its cell, where the circle
+    margin (the cell's worst point) says "maybe": never a pose whose polygon meets a blocked cell (random cells,
+    and walls at any angle), and some of the "maybe" poses along the walls that fit (a tenth here)."""
+    from planner.maps.clearance import circle_margin_at, circles_clear_at
+
+    walls = np.zeros((150, 150), bool)
+    walls[30:34, 10:140] = True
+    walls[60:140, 70:73] = True
+    rows, cols = np.mgrid[0:150, 0:150]
+    walls |= np.abs((rows - 100) - 0.6 * (cols - 20)) < 1.5  # a slanted wall
+    for grid, n, walled in ((_random_world(5), 8000, False), (OccupancyGrid.from_occupied(walls, 0.05), 30000, True)):
+        clear = ClearanceMap(grid)
+        fp = CircleFootprint.for_robot(robot)
+        rng = np.random.default_rng(6)
+        size = grid.size_m
+        maybe_free = proven = 0
+        for x, y, yaw in zip(rng.uniform(0.3, size[0] - 0.3, n), rng.uniform(0.3, size[1] - 0.3, n),
+                             rng.uniform(-3.2, 3.2, n), strict=True):
+            c, s = math.cos(yaw), math.sin(yaw)
+            args = (clear.clearance, clear.origin_x, clear.origin_y, clear.resolution_m, x, y, c, s, fp.offsets_x,
+                    fp.offsets_y, fp.radius_m)
+            if circle_margin_at(*args) >= 0.0:
+                continue
+            hit = footprint_hits(grid, robot, x, y, yaw)
+            if circles_clear_at(*args):
+                assert not hit, (x, y, yaw)
+                proven += 1
+            maybe_free += not hit
+        if walled:
+            assert maybe_free > 300 and proven > 0.05 * maybe_free, (maybe_free, proven)
