@@ -457,7 +457,7 @@ def _shot_segments(
         cx, cy = roll_shift(cx, cy, cyaw, radius, groll - croll)
         ex = cx - gx
         ey = cy - gy
-        if math.hypot(ex, ey) < 1e-4:
+        if ex * ex + ey * ey < 1e-8:  # (within 0.1 mm; squared, as every distance test below: libm's hypot is dear)
             ok = True
             break
         tx -= ex
@@ -587,7 +587,7 @@ def _shortcut_from(
     while j > i + 1:
         budget = cum[j] - cum[i] - 1e-6
         gx, gy, gyaw = knots[j, 0], knots[j, 1], knots[j, 2]
-        if math.hypot(gx - x, gy - y) >= budget:
+        if budget <= 0.0 or (gx - x) ** 2 + (gy - y) ** 2 >= budget * budget:
             j -= stride
             continue
         if i - failed_from[j] < recheck and (i + j) % recheck != 0:
@@ -923,7 +923,7 @@ def search_chunk(
         s_yaw = math.sin(yaw)
         # 2. Goal test: bring the roll back to 0 (a sideways shift) and compare with the goal pose.
         gx, gy = roll_shift_cs(x, y, c_yaw, s_yaw, radius, -roll)
-        if (math.hypot(gx - p[P_GX], gy - p[P_GY]) <= p[P_TOL_XY]
+        if ((gx - p[P_GX]) ** 2 + (gy - p[P_GY]) ** 2 <= p[P_TOL_XY] * p[P_TOL_XY]
                 and abs(wrap(yaw - p[P_GYAW])) <= p[P_TOL_YAW]
                 and _motion_margin(clear, blocked, p, offx, offy, px, py, x, y, yaw, -roll, 0.0, 0.0, math.inf) >= 0.0):
             counters[C_RESULT] = k
@@ -964,7 +964,7 @@ def search_chunk(
                 return FOUND
         src = -1
         if (allow_reverse and h_here < 0.9 * p[P_CLOSER_H]
-                and math.hypot(x - p[P_GX], y - p[P_GY]) < MAX_SHOT_M):
+                and (x - p[P_GX]) ** 2 + (y - p[P_GY]) ** 2 < MAX_SHOT_M * MAX_SHOT_M):
             # 3b. Reeds–Shepp (reversing), from each node a tenth closer to the goal (by h) than the last one shot
             #     from (the start first) ...
             p[P_CLOSER_H] = h_here
