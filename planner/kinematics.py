@@ -134,7 +134,11 @@ def densify_motions(start: np.ndarray, motions: np.ndarray, radius_m: float, spa
 
 @njit_leaf
 def wrap(a: float) -> float:
-    """A scalar angle wrapped to (−π, π] (compiled: usable from the search loop and from Python)."""
+    """A scalar angle wrapped to (−π, π] (compiled: usable from the search loop and from Python). An angle in the
+    range is returned as it is (the search wraps every child's heading, nearly all in range already: a sine, a
+    cosine and an atan2 each were a fifth of a plan's CPU samples; they also moved one angle in 25 by an ulp)."""
+    if -math.pi < a <= math.pi:
+        return a
     w = math.atan2(math.sin(a), math.cos(a))
     return math.pi if w == -math.pi else w
 
