@@ -9,7 +9,9 @@ Footprint collision in two tiers (paper 001 §4.1, Fig. 6, then exact):
    (:attr:`planner.robot.RobotProfile.footprint_polygon`) is covered by 1..N equal circles along its
    longer axis; the count whose union overshoots the polygon least is used (one circle for a round
    sphere, three for a long body). Obstacles are "inflated" by r_c through a Euclidean distance
-   transform, so a pose is certainly free when every circle centre has clearance ≥ r_c: O(N) lookups.
+   transform, so a pose is certainly free when every circle centre has clearance ≥ r_c: O(N) lookups. Where
+   that says "maybe", a pose is still proven free when every centre, from where it lies in its cell, is r_c
+   from every blocked square (:func:`circles_clear_at`).
 2. *The polygon decides* where the circles say "maybe": the blocked cells under the polygon's bounding
    box are tested exactly against the polygon (a cell square meets the polygon when its centre is inside
    or an edge of the polygon crosses it). Exact to the grid: a gap the footprint fits through is found.
