@@ -21,7 +21,7 @@ One name per meaning (every wing uses these words, and only these):
 * **clearance** (m, per cell): :attr:`ClearanceMap.clearance`, a conservative distance from anywhere in the
   cell to the nearest blocked cell (see below); what the covering circles are inflated against.
 * **circle margin** (m, per pose): min over the covering circles of clearance − r_c; ≥ 0 proves the pose
-  free, < 0 only says "maybe". Kernel :func:`circle_margin`, many poses :meth:`ClearanceMap.circle_margins`.
+  free, < 0 only says "maybe". Kernel :func:`circle_margin_at`, many poses :meth:`ClearanceMap.circle_margins`.
 * **footprint hit** (bool, per pose): the exact polygon meets a blocked cell or leaves the map. Kernel
   :func:`footprint_hits`.
 * **footprint margin** (m, per pose): the two-tier answer — the circle margin where it is ≥ 0, else 0.0
@@ -342,15 +342,14 @@ class ClearanceMap:
         poly = np.asarray(polygon, float)
         px, py = np.ascontiguousarray(poly[:, 0]), np.ascontiguousarray(poly[:, 1])
         lower = np.ascontiguousarray(lower_m, dtype=float)
-        if footprint is None or measured is None:
-            return float(_least_distance(self.blocked, self.origin_x, self.origin_y, self.resolution_m, poses, lower,
-                                         np.argsort(lower), px, py, reach_m, self.clearance, _NO_OFFSETS,
-                                         _NO_OFFSETS, 0.0, _NO_POSES))
-        first = np.flatnonzero(measured)
+        if footprint is None or measured is None:  # every bound a margin: all poses in order of their bound
+            order, rest, offx, offy, r_c = np.argsort(lower), _NO_POSES, _NO_OFFSETS, _NO_OFFSETS, 0.0
+        else:
+            first = np.flatnonzero(measured)
+            order, rest = first[np.argsort(lower[first])], np.flatnonzero(~np.asarray(measured, dtype=bool))
+            offx, offy, r_c = footprint.offsets_x, footprint.offsets_y, footprint.radius_m
         return float(_least_distance(self.blocked, self.origin_x, self.origin_y, self.resolution_m, poses, lower,
-                                     first[np.argsort(lower[first])], px, py, reach_m, self.clearance,
-                                     footprint.offsets_x, footprint.offsets_y, footprint.radius_m,
-                                     np.flatnonzero(~np.asarray(measured, dtype=bool))))
+                                     order, px, py, reach_m, self.clearance, offx, offy, r_c, rest))
 
 
 _NO_OFFSETS = np.zeros(0)
@@ -798,22 +797,14 @@ def _clearance_at(clear: np.ndarray, ox: float, oy: float, res: float, xs: np.nd
     return out
 
 
-@njit(cache=True)
-def circle_margin(
-    clear: np.ndarray, ox: float, oy: float, res: float, x: float, y: float, yaw: float,
-    offx: np.ndarray, offy: np.ndarray, r_c: float,
-) -> float:
-    """Min over circles of (clearance − r_c) at one pose; −inf when a circle leaves the map."""
-    return circle_margin_at(clear, ox, oy, res, x, y, math.cos(yaw), math.sin(yaw), offx, offy, r_c)
-
-
 @njit_leaf
 def circle_margin_at(
     clear: np.ndarray, ox: float, oy: float, res: float, x: float, y: float, c: float, s: float,
     offx: np.ndarray, offy: np.ndarray, r_c: float,
 ) -> float:
-    """:func:`circle_margin` with the heading given as its cosine ``c`` and sine ``s`` (the search's sweeps
-    compute them once per motion or share them with the pose itself; the value is the same to the bit)."""
+    """Min over circles of (clearance − r_c) at one pose (x, y, heading with cosine ``c`` and sine ``s``: the
+    search's sweeps compute them once per motion or share them with the pose itself); −inf when a circle leaves the
+    map."""
     h, w = clear.shape
     best = math.inf
     for k in range(offx.size):
