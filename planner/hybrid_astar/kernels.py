@@ -41,15 +41,16 @@ N_COUNTERS = 15
  P_STEP, P_SPACING, P_NON_STRAIGHT, P_CHANGE, P_REVERSE, P_SWITCH, P_COST_PENALTY, P_PROX_RANGE, P_GREED,
  P_SHOT_RATIO, P_MAX_ROLL, P_USE_DUBINS, P_ALLOW_REVERSE, P_N_YAW, P_USE_RS, P_RS_CELL, P_RS_HALF,
  P_PREFERRED, P_REACH, P_BEST_H, P_REJECT, P_CLOSER_H, P_HELD_COST, P_BACK_SHARE, P_BOUND, P_LONG,
- P_GCOS, P_GSIN, P_FALL_WAIT, P_BACK_WAIT, P_HOLD_WAIT, P_CONVEX, P_GENTLE_N, P_GENTLE) = range(48)
+ P_GCOS, P_GSIN, P_FALL_WAIT, P_BACK_WAIT, P_HOLD_WAIT, P_CONVEX, P_GENTLE_N, P_ROOT_SHOT, P_GENTLE) = range(49)
 # P_GCOS, P_GSIN: cos and sin of P_GYAW (for the Reeds–Shepp table's frame); P_FALL_WAIT: expansions a fallback
 # shot (3d) waits for one that keeps the room asked, 0 = no fallback shots; P_BACK_WAIT: a fallback shot that rolls
 # the path mostly backwards waits this × P_FALL_WAIT, 0 = none is kept; P_HOLD_WAIT: expansions a held-back shot (3c)
 # waits for a path that rolls forwards more; P_CONVEX: clearance.convex_turn of the footprint polygon (0, the old
 # test, when left unset); P_GENTLE_N: how many turns gentler than ±P_MAX_ROLL at radius P_RHO a shortcut may be
-# rolled with instead (:func:`_gentler`), as pairs (radius, roll) from P_GENTLE on, gentlest first
+# rolled with instead (:func:`_gentler`), as pairs (radius, roll) from P_GENTLE on, gentlest first; P_ROOT_SHOT: 1 =
+# the first node's cheapest Reeds–Shepp shot (SHOT_WEIGHTED) is taken even when it rolls mostly backwards (3c)
 MAX_GENTLE = 4
-N_PARAMS = 48 + 2 * MAX_GENTLE
+N_PARAMS = 49 + 2 * MAX_GENTLE
 BEST_SHOT_EVERY = 256  # reversing: every this many expansions, a Reeds–Shepp shot from the closest node if new
 NEAR_TIE = 1.05  # the second / third cheapest Reeds–Shepp word is shot only within this ratio of the cheapest
 MAX_SHOT_SEGS = 6  # a Dubins shot has 3 segments, a Reeds–Shepp shot up to 5
@@ -981,7 +982,9 @@ def search_chunk(
             here = _pose_margin(clear, blocked, p, offx, offy, px, py, sx, sy, syaw)
             keep = max(0.0, min(p[P_PREFERRED], here, goal_pose_margin))
             n = 0
+            took = -1
             for kind in (SHOT_WEIGHTED, SHOT_SHORTEST, SHOT_SECOND, SHOT_THIRD):
+                took = kind
                 n, short = _shot_or_fallback(clear, blocked, p, offx, offy, px, py, sx, sy, syaw, sroll, p[P_GX],
                                              p[P_GY], p[P_GYAW], 0.0, seg_roll, seg_curv, seg_len, MAX_SHOT_M, keep,
                                              kind, _may_fall(counters, p, keep))
@@ -996,7 +999,12 @@ def search_chunk(
                     break
             if n > 0:
                 back, total = _backwards(node_f, node_i, src, step, seg_len, n)
-                if back <= p[P_BACK_SHARE] * total:
+                # (a shot from the start itself, P_ROOT_SHOT, by the word cheapest under the search's weights is the
+                # cheapest path in free space by the measure a path that turns round would have to beat: none can,
+                # so it is not held, however far it rolls backwards; issue 21's eighteenth round, depot#1 of seed 1:
+                # 634 expansions -> 1, the same path)
+                if back <= p[P_BACK_SHARE] * total or (p[P_ROOT_SHOT] > 0.5 and node_i[src, 0] < 0
+                                                       and took == SHOT_WEIGHTED):
                     counters[C_RESULT] = src
                     counters[C_SHOT_SEGS] = n
                     return FOUND

@@ -91,6 +91,7 @@ GOAL_CHECK_SHARE = 0.15  # ... and at most this share of the time limit
 BUDGET_BINS = 72
 GOAL_SIDE_AFTER = 500  # expansions without a path before the goal side's search joins in (two_ended.py)
 MEET_AFTER = 2_000  # expansions of both sides before shots try to join their trees (meet.py) (×bins)
+ROOT_SHOT_AT_ONCE = True  # the start's own cheapest shot is the path at once, however far it rolls backwards (kernels 3c)
 HOLD_EXPANSIONS = 4_000  # a held-back shot (kernels 3c, P_HOLD_WAIT) waits this many for a path that rolls forwards
 # more (×bins)
 FORWARD_RETRY_PER_M = 250  # expansions a forward-only search may take to find a cheaper path, per metre start–goal
@@ -635,6 +636,7 @@ class HybridAStar:
                 planning_time_s=time.perf_counter() - t0,
             )
         run = _Search(self, start, goal, heur, o, self.reverse)
+        run.p[kernels.P_ROOT_SHOT] = 1.0 if ROOT_SHOT_AT_ONCE else 0.0
         run.p[kernels.P_FALL_WAIT] = FALLBACK_WAIT
         run.p[kernels.P_BACK_WAIT] = BACK_FALLBACK_WAIT
         side = self._drive(run, start, goal, o, clock)

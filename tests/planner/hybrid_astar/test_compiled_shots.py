@@ -197,7 +197,9 @@ def test_a_mostly_backwards_shot_is_held_back_while_the_search_goes_on() -> None
     assert run.counters[kernels.C_SHOT_SEGS] == 0 and run.expansions < wait
 
 
-def test_the_held_back_shot_is_the_path_when_the_search_runs_out() -> None:
+def test_the_held_back_shot_is_the_path_when_the_search_runs_out(monkeypatch) -> None:
+    # (the start's own cheapest shot is not held in a plan: test_the_starts_cheapest_shot_is_the_path_at_once)
+    monkeypatch.setattr(search, "ROOT_SHOT_AT_ONCE", False)
     grid = _corridor()
     start, goal = (12.0, 0.75, 0.0), (4.0, 0.75, 0.0)
     result = HybridAStar(grid, ROBOT, PlannerOptions(prefer_forward=False)).plan(
@@ -205,6 +207,39 @@ def test_the_held_back_shot_is_the_path_when_the_search_runs_out() -> None:
     assert check_path(grid, ROBOT, result.states, start, goal) == []
     assert result.analytic_segments > 0 and result.expansions == 20
     assert _backwards_m(result.states) > 0.95 * result.length_m
+
+
+def test_the_starts_cheapest_shot_is_the_path_at_once(monkeypatch) -> None:
+    """depot#1 of the real bench's seed-1 draw: in the open, the goal 8 m behind, facing across. The shot from the
+    start by the word cheapest under the search's weights rolls mostly backwards; no path that turns round can cost
+    less (it is the cheapest path with no obstacles at all), so the plan takes it at the first expansion instead of
+    holding it while the search looks for one (634 expansions), for the same path."""
+    grid = load_map("maps/real/depot.yaml")
+    start, goal = (11.425, 7.125, -0.14404827093188777), (4.425, 11.725, -1.7435407827295963)
+    planner = HybridAStar(grid, ROBOT, PlannerOptions())
+    o = planner.options
+    cheapest = rs_best(*start, *goal, ROBOT.min_turning_radius_m, o.reverse_penalty, o.switch_cost_m,
+                       np.empty(MAX_SEGS, np.int64), np.empty(MAX_SEGS))[1]
+    results = {}
+    for at_once in (True, False):
+        monkeypatch.setattr(search, "ROOT_SHOT_AT_ONCE", at_once)
+        planner.forget_heuristics()
+        result = planner.plan(start, goal)
+        assert check_path(grid, ROBOT, result.states, start, goal) == []
+        assert _backwards_m(result.states) > 0.95 * result.length_m
+        results[at_once] = result
+    taken, held = results[True], results[False]
+    assert taken.expansions == 1 and "held_shot_taken" not in taken.extra and taken.analytic_segments > 0
+    assert "forward_alternative_expansions" not in taken.extra  # no forward path can cost less either
+    assert held.expansions > 100
+    assert taken.length_m == pytest.approx(held.length_m, abs=1e-3)
+    assert taken.min_clearance_m == pytest.approx(held.min_clearance_m, abs=1e-3)
+    # the path's cost by the planner's measure is the free-space cheapest word's (within the sphere's roll shifts)
+    moving = np.sign(taken.states[1:, 4][taken.states[1:, 4] != 0])
+    cost = (taken.length_m + (o.reverse_penalty - 1.0) * _backwards_m(taken.states)
+            + o.switch_cost_m * int(np.count_nonzero(np.diff(moving))))
+    shifts = ROBOT.radius_m * float(np.abs(np.diff(taken.states[:, 3])).sum())  # sideways, at the roll changes
+    assert cheapest <= cost <= cheapest + o.reverse_penalty * shifts + 1e-3
 
 
 @pytest.mark.parametrize("name, start, goal, held_cheaper, turned", [

@@ -29,7 +29,7 @@ for name, start, goal, mark in (
     # a turn between the two trees (two_ended.GoalSide._turn)
     ("pockets", (18.675, 13.375, 0.7312609262013985), (23.025, 17.175, 2.609458811313899), "turn_searches"),
     # a held shot that costs less than the path found meanwhile
-    ("depot", (11.425, 7.125, -0.14404827093188777), (4.425, 11.725, -1.7435407827295963), "held_shot_taken"),
+    ("depot", (16.875, 2.725, -0.7051674435222814), (23.475, 10.275, 0.6605926729954539), "held_shot_taken"),
     # the forward-only alternative search, and the anytime rounds
     ("depot", (26.025, 9.575, 0.06727095832306862), (10.625, 9.575, 3.1096574102329626),
      "forward_alternative_expansions"),
