@@ -91,7 +91,7 @@ GOAL_CHECK_SHARE = 0.15  # ... and at most this share of the time limit
 BUDGET_BINS = 72
 GOAL_SIDE_AFTER = 500  # expansions without a path before the goal side's search joins in (two_ended.py)
 MEET_AFTER = 2_000  # expansions of both sides before shots try to join their trees (meet.py) (×bins)
-ROOT_SHOT_AT_ONCE = True  # the start's own cheapest shot is the path at once, however far it rolls backwards (kernels 3c)
+ROOT_SHOT_AT_ONCE = True  # the start's own cheapest shot is the path at once, even rolling backwards (kernels 3c)
 HOLD_EXPANSIONS = 4_000  # a held-back shot (kernels 3c, P_HOLD_WAIT) waits this many for a path that rolls forwards
 # more (×bins)
 FORWARD_RETRY_PER_M = 250  # expansions a forward-only search may take to find a cheaper path, per metre start–goal
@@ -100,9 +100,9 @@ FORWARD_RETRY_MIN = 1_000  # ... at least this many
 FORWARD_RETRY_MAX = 20_000  # ... and at most this many (docs/planning.md: the budgets the accepted paths needed)
 FORWARD_RETRY_SHARE = 0.5  # ... tried when the path found rolls more than this share of its length backwards
 FORWARD_RETRY_TIMES = 3  # ... and at most this many × the plan's expansions before it
-FORWARD_CHECK_BUDGET = 600  # ... unless a forward-only search from the goal exhausts within this many (a dead end)
-# (×bins)
-FORWARD_CHECK_WORTH = 4  # ... a check run only when the forward search may take more than this many × its budget
+FORWARD_CHECK_BUDGET = 600  # ... and this many more for its goal side, which proves there is no forward path
+# cheaper when it runs out of states (×bins)
+FORWARD_SLICE = 100  # ... the two sides taking turns of this many expansions (issue 21's eighteenth round)
 _LOOP = threading.local()  # the current thread's plan: its clock, its seconds in the compiled loop (search_loop_time_s)
 GROWTH_MARGIN = 2.5  # a search's storage grows only when this × its last growth's time still fits before the deadline
 # Smoothing's recheck rule (kernels.shortcut): a target whose shot failed from a knot just before is retried only
@@ -850,12 +850,13 @@ class HybridAStar:
         (the Dubins distance is below its cost), a forward-only search (whose Dubins heuristic does
         see the turn) gets FORWARD_RETRY_PER_M expansions per metre from start to goal, at most
         FORWARD_RETRY_TIMES × the plan's ``spent`` expansions (:meth:`forward_budget`) and what is left of the time
-        limit; the cheaper of the two paths is returned. It is not run when a forward-only search of the reverse
-        problem from the goal exhausts within FORWARD_CHECK_BUDGET expansions (no forward path reaches the goal);
-        that check's expansions are appended to ``checked``. The check is run only when the forward search's own
-        budget exceeds FORWARD_CHECK_WORTH × the check's: it exhausts on about one in five plans, and below that
-        it costs more than it spares (issue 21's eleventh round). Either way the path is the same: where the
-        check exhausts no forward path exists, and the forward search finds none.
+        limit; the cheaper of the two paths is returned. Both it and the search of the reverse problem from the goal
+        (its goal side, rolling forwards too) prune what costs more than ``bound``, and take turns
+        (:meth:`_forward_both_ends`) with FORWARD_CHECK_BUDGET more expansions between them: where the start is the
+        hard end (a start facing a wall, a turn the holonomic heuristic does not see), the goal side finds the path;
+        where either side runs out of states, no forward path costs less. The goal side's expansions are appended
+        to ``checked``. (Until issue 21's eighteenth round the goal side was only a check run first, up to
+        FORWARD_CHECK_BUDGET expansions, that let the start's side alone search when it did not run dry.)
         """
         if not self._mostly_backwards(start, motions):
             return None, None
@@ -863,20 +864,76 @@ class HybridAStar:
         if dubins_distance(*start, *goal, self.robot.min_turning_radius_m) >= cost:
             return None, None
         cap = self.forward_budget(start, goal, spent, self.budget_scale)
-        check = self.budget(FORWARD_CHECK_BUDGET)
-        if cap > FORWARD_CHECK_WORTH * check and self.goal_side_ok and self._reverse_search(
-                start, goal, o, clock, reverse=False, budget=check, spent=checked) is not None:
-            return None, None  # the goal cannot be approached rolling forwards: no forward path exists
         run = _Search(self, start, goal, heur, o, False)
         run.p[kernels.P_BOUND] = bound
+        if self.goal_side_ok:
+            found = self._forward_both_ends(run, start, goal, o, clock, cap + self.budget(FORWARD_CHECK_BUDGET),
+                                            bound, checked)
+        else:  # (a footprint that is not centrally symmetric: the start's side alone)
+            try:
+                self._drive(run, start, goal, o, clock, fail_fast=False, cap=cap)
+                found = self._motions(run)
+            except PlannerCancelled:
+                raise
+            except PlanningError:
+                found = None
+        if found is None:
+            return run, None
+        forward = self._smooth(start, found, run.p, o)
+        if self._travel_cost(start, forward, o) >= cost:
+            return run, None
+        # a path joined from the two sides may pass closer than the search's own shots do (meet.py): it is taken only
+        # when it keeps the room the first path keeps, or at least LEAST_KEPT_MARGIN_M (a lower bound of the room,
+        # as a shot keeps it: issue 21's eighteenth round)
+        keep = min(self._least_margin(start, motions), kernels.LEAST_KEPT_MARGIN_M)
+        return run, (forward if self._least_margin(start, forward) >= keep - 1e-6 else None)
+
+    def _least_margin(self, start: Pose, motions: list[tuple[float, float, float]]) -> float:
+        """The least footprint margin along the path at the final check's spacing (the covering circles' margin, a
+        lower bound of its clearance, 0 where only the exact polygon fits: :meth:`ClearanceMap.footprint_margins`)."""
+        fine = self._densify(start, motions, self.grid.resolution_m / 4)
+        return float(self.clearance.footprint_margins(self.footprint, self.polygon, fine[:, :3]).min())
+
+    def _forward_both_ends(self, run: _Search, start: Pose, goal: Pose, o: PlannerOptions, clock: Clock, total: int,
+                           bound: float, checked: list[int] | None) -> list[tuple[float, float, float]] | None:
+        """The forward-only search ``run`` and its goal side (:class:`GoalSide`, rolling forwards only), both
+        bounded by ``bound``, in turns of FORWARD_SLICE expansions (the start's side first: with the goal side
+        first, the same budget split evenly from the first expansion, 3 of the 15 paths below were lost), ``total``
+        expansions between them at most: the
+        motions of the path either finds (or a shot joining their trees, as in :meth:`_drive`), else None. When
+        either side runs out of states below the bound, no forward path costs less. The goal side's expansions are
+        appended to ``checked``."""
+        side = GoalSide(self, start, goal, o, _Search, reverse=False)
+        side.run.p[kernels.P_BOUND] = bound
+        meet_every = self.chunk_expansions(o)
+        next_meet = self.budget(MEET_AFTER)
+        found = False
         try:
-            self._drive(run, start, goal, o, clock, fail_fast=False, cap=cap)
+            while True:
+                left = total - run.expansions - side.expansions
+                if left <= 0 or clock.expired() or clock.cancelled():
+                    break
+                status = run.step(min(FORWARD_SLICE, left))
+                if status != kernels.RUNNING:
+                    found = status == kernels.FOUND
+                    break
+                if side.step(min(FORWARD_SLICE, total - run.expansions - side.expansions)):
+                    break
+                if run.expansions + side.expansions >= next_meet:
+                    next_meet = run.expansions + side.expansions + meet_every
+                    if side.meet(run, clock):
+                        break
         except PlannerCancelled:
             raise
-        except PlanningError:
-            return run, None
-        forward = self._smooth(start, self._motions(run), run.p, o)
-        return run, (forward if self._travel_cost(start, forward, o) < cost else None)
+        except PlanningError:  # out of time: no forward path, as when the budget runs out
+            pass
+        if checked is not None:
+            checked.append(side.expansions)
+        if clock.cancelled():
+            raise PlannerCancelled("planning was cancelled", expansions=run.expansions + side.expansions)
+        if side.motions is not None:
+            return side.motions
+        return self._motions(run) if found else None
 
     @staticmethod
     def forward_budget(start: Pose, goal: Pose, spent: int = 0, scale: float = 1.0) -> int:

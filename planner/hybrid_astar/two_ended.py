@@ -83,15 +83,17 @@ class GoalSide:
     ``new_search(planner, start, goal, heuristic, options, reverse)`` makes the search (search.py's ``_Search``).
     """
 
-    def __init__(self, planner: Any, start: Pose, goal: Pose, o: Any, new_search: Callable[..., Any]) -> None:
+    def __init__(self, planner: Any, start: Pose, goal: Pose, o: Any, new_search: Callable[..., Any],
+                 reverse: bool | None = None) -> None:
         self.planner = planner
+        self.reverse = planner.reverse if reverse is None else reverse
         self.o = o
         self.start = start
         self.goal = goal
         self.back_start = (goal[0], goal[1], wrap(goal[2] + math.pi))
         self.back_goal = (start[0], start[1], wrap(start[2] + math.pi))
         heur = planner.holonomic(self.back_goal[:2], self.back_start[:2], GOAL_SIDE_STOP_FACTOR)
-        self.run = new_search(planner, self.back_start, self.back_goal, heur, o, planner.reverse)
+        self.run = new_search(planner, self.back_start, self.back_goal, heur, o, self.reverse)
         self.motions: list[Motion] | None = None
         self.exhausted = False
         self.closed_gaps = 0
@@ -188,7 +190,7 @@ class GoalSide:
             bx, by, byaw = (float(v) for v in self.run.node_f[j, :3])
             goal = (bx, by, wrap(byaw + math.pi))
             run = self.new_search(pl, start, goal, pl.holonomic(goal[:2], start[:2], cache=False), self.o,
-                                  pl.reverse)
+                                  self.reverse)
             run.p[kernels.P_TOL_XY] = 0.0
             run.p[kernels.P_TOL_YAW] = 0.0
             status = run.run_for(TURN_BUDGET, clock)

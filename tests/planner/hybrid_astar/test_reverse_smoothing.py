@@ -121,12 +121,14 @@ def test_a_path_that_must_back_out_is_left_alone() -> None:
     assert "forward_alternative_expansions" not in result.extra
 
 
-def test_a_goal_that_cannot_be_approached_forwards_skips_the_forward_search() -> None:
+def test_a_goal_that_cannot_be_approached_forwards_ends_the_forward_search_at_once() -> None:
     """pockets#8 of the real-map bench: the path rolls mostly backwards and a forward path could be cheaper by the
     Dubins bound, but the goal sits in a pocket that a forward-only search from the goal exhausts in a few states:
-    no forward path exists, so the forward search (up to 20 000 expansions) is not run (it was, before)."""
+    no forward path exists. The forward-only search's goal side (rolling forwards from the goal) runs dry in those
+    few states (fewer still below the first path's cost), after one turn of the start's side (up to 20 000
+    expansions before the goal check, issue 21's sixth round)."""
     from planner.hybrid_astar.dubins import dubins_distance
-    from planner.hybrid_astar.search import FORWARD_CHECK_BUDGET
+    from planner.hybrid_astar.search import FORWARD_CHECK_BUDGET, FORWARD_SLICE
     from planner.termination import Termination
 
     grid = load_map("maps/real/pockets.yaml")
@@ -140,8 +142,9 @@ def test_a_goal_that_cannot_be_approached_forwards_skips_the_forward_search() ->
     exhausted = planner._reverse_search(start, goal, o, Termination(10).start(), reverse=False,
                                         budget=FORWARD_CHECK_BUDGET)
     assert exhausted is not None and exhausted < 100
-    assert "forward_alternative_expansions" not in result.extra
-    assert result.extra["forward_check_expansions"] == exhausted  # counted in the result's expansions
+    assert "forward_alternative" not in result.extra
+    assert 0 < result.extra["forward_check_expansions"] <= exhausted  # counted in the result's expansions
+    assert result.extra["forward_alternative_expansions"] <= FORWARD_SLICE
     # the garage's goal can be approached forwards: there the forward search still runs and wins (test above)
     assert HybridAStar(load_map("maps/garage.yaml"), ROBOT, o)._reverse_search(
         START, GOAL, o, Termination(10).start(), reverse=False, budget=FORWARD_CHECK_BUDGET) is None
@@ -151,16 +154,23 @@ def test_the_forward_check_budget_still_proves_the_deepest_dead_end_seen() -> No
     """pockets#8 of the real-map bench's seed-1 draw: the deepest goal pocket over seeds 0–5 (360 problems) whose
     forward-only check exhausts, after 516 expansions (the next ones 497 and 348; one more at 833 is given up). The
     check's budget was cut from 1 000 (it runs to its budget on every plan whose goal can be approached forwards: 68
-    of those 360 plans) but still proves this one, so the forward search is not run."""
+    of those 360 plans) but still proves this one."""
     from planner.hybrid_astar.search import FORWARD_CHECK_BUDGET
+    from planner.termination import Termination
 
     grid = load_map("maps/real/pockets.yaml")
     start, goal = (8.925, 3.525, 2.0387814393209416), (6.975, 17.375, 1.7503720758899775)
     o = PlannerOptions(n_yaw_bins=SCENARIO_BINS)
-    result = HybridAStar(grid, ROBOT, o).plan(start, goal)
+    planner = HybridAStar(grid, ROBOT, o)
+    exhausted = planner._reverse_search(start, goal, o, Termination(10).start(), reverse=False,
+                                        budget=FORWARD_CHECK_BUDGET)
+    assert exhausted is not None and 500 < exhausted <= FORWARD_CHECK_BUDGET
+    # Since issue 21's eighteenth round the goal side is part of the forward search, and both prune what costs more
+    # than the first path: here the start's side runs out of such states first, in 24 expansions.
+    result = planner.plan(start, goal)
     assert check_path(grid, ROBOT, result.states, start, goal) == []
-    assert 500 < result.extra["forward_check_expansions"] <= FORWARD_CHECK_BUDGET
-    assert "forward_alternative_expansions" not in result.extra
+    assert "forward_alternative" not in result.extra
+    assert result.extra["forward_alternative_expansions"] + result.extra["forward_check_expansions"] < 100
 
 
 def test_the_forward_search_gets_a_budget_by_distance() -> None:
@@ -196,7 +206,13 @@ def test_the_expansion_budgets_follow_the_heading_bins(bins) -> None:
     bin, so a search at 36 bins, whose expansions roll twice as far, gets half of each (issue 21's thirteenth round):
     the same metres of search. smoothers_world#8 of seed 0 (above) runs its forward alternative to the budget."""
     from planner.hybrid_astar import kernels
-    from planner.hybrid_astar.search import BUDGET_BINS, FORWARD_RETRY_MIN, HOLD_EXPANSIONS, MEET_AFTER
+    from planner.hybrid_astar.search import (
+        BUDGET_BINS,
+        FORWARD_CHECK_BUDGET,
+        FORWARD_RETRY_MIN,
+        HOLD_EXPANSIONS,
+        MEET_AFTER,
+    )
 
     grid = load_map("maps/real/smoothers_world.yaml")
     start, goal = (9.275, 5.325, -0.9024881717968012), (7.875, 2.025, -1.7184486953680036)
@@ -207,44 +223,82 @@ def test_the_expansion_budgets_follow_the_heading_bins(bins) -> None:
     assert HybridAStar.forward_budget(start, goal, 0, planner.budget_scale) == FORWARD_RETRY_MIN * share
     result = planner.plan(start, goal)
     assert check_path(grid, ROBOT, result.states, start, goal) == []
-    assert result.extra["forward_alternative_expansions"] == FORWARD_RETRY_MIN * share
+    spent = result.extra["forward_alternative_expansions"] + result.extra["forward_check_expansions"]
+    assert spent == (FORWARD_RETRY_MIN + FORWARD_CHECK_BUDGET) * share  # the two sides' budget, shared
 
 
 def test_a_plan_found_quickly_spends_little_on_the_forward_alternative() -> None:
     """depot#1 of the real-map bench's seed 0: the search holds back a shot that rolls mostly backwards and takes it
     after 57 expansions. The forward-only alternative then gets 3 × those (171), not the floor of 1 000 that found
-    nothing cheaper; and the forward-only goal check is skipped, since its own 600 expansions would cost more than
-    the search it may spare (before issue 21's eleventh round: 57 + 600 + 1 000 expansions, 18 × BIT*'s first
-    solution; now 228)."""
+    nothing cheaper, and its goal side the forward check's 300 more (at 36 heading bins) between them (before issue
+    21's eleventh round: 57 + 600 + 1 000 expansions, 18 × BIT*'s first solution; 228 until the eighteenth round
+    made the goal side part of the forward search, 456 since)."""
     from planner.hybrid_astar.search import FORWARD_CHECK_BUDGET, FORWARD_RETRY_TIMES
 
     grid = load_map("maps/real/depot.yaml")
     start, goal = (26.025, 9.575, 0.06727095832306862), (10.625, 9.575, 3.1096574102329626)
-    result = HybridAStar(grid, ROBOT).plan(start, goal)
+    planner = HybridAStar(grid, ROBOT)
+    result = planner.plan(start, goal)
     assert check_path(grid, ROBOT, result.states, start, goal) == []
     assert result.extra.get("held_shot_taken")
-    searched = result.expansions - result.extra["forward_alternative_expansions"]
-    assert 0 < result.extra["forward_alternative_expansions"] <= FORWARD_RETRY_TIMES * searched
+    forward = result.extra["forward_alternative_expansions"] + result.extra["forward_check_expansions"]
+    searched = result.expansions - forward
+    assert 0 < forward <= FORWARD_RETRY_TIMES * searched + planner.budget(FORWARD_CHECK_BUDGET)
     assert FORWARD_RETRY_TIMES * searched <= FORWARD_CHECK_BUDGET
-    assert "forward_check_expansions" not in result.extra
-    assert result.expansions < 400
+    assert result.expansions < 500
 
 
-def test_the_forward_check_runs_only_before_a_dear_forward_search() -> None:
-    """smoothers_world#9 of the real-map bench's seed 0: the forward alternative may take 1 000 expansions, within
-    FORWARD_CHECK_WORTH × the check's 600. The check is not run (it proved this goal's pocket in 195 expansions; over
-    the 121 checks of seeds 0–7 the checks that did not exhaust cost 600 each and those below 4 × 600 spared 1 000–2 400
-    only 5 times in 46), and the forward search itself ends at once: no forward path within the path's cost."""
-    from planner.hybrid_astar.search import FORWARD_CHECK_BUDGET, FORWARD_CHECK_WORTH
-
+def test_the_forward_search_ends_at_once_when_nothing_forwards_is_cheaper() -> None:
+    """smoothers_world#9 of the real-map bench's seed 0: the forward alternative may take 1 000 expansions, but its
+    start's side runs out of states that cost less than the first path in two (until issue 21's eleventh round a
+    forward check of 600 ran first; it proved this goal's pocket in 195 expansions)."""
     grid = load_map("maps/real/smoothers_world.yaml")
     start, goal = (11.225, 4.375, -2.0729579111761445), (9.825, 1.125, 1.6366855694506848)
-    assert FORWARD_CHECK_BUDGET < HybridAStar.forward_budget(start, goal) <= FORWARD_CHECK_WORTH * FORWARD_CHECK_BUDGET
     result = HybridAStar(grid, ROBOT).plan(start, goal)
     assert check_path(grid, ROBOT, result.states, start, goal) == []
-    assert "forward_check_expansions" not in result.extra
-    assert 0 < result.extra["forward_alternative_expansions"] < 50
+    assert 0 < result.extra["forward_alternative_expansions"] + result.extra["forward_check_expansions"] < 50
     assert "forward_alternative" not in result.extra
+
+
+def test_a_forward_path_found_from_the_goal_replaces_one_rolling_backwards() -> None:
+    """100by100_20#7 of the real-map bench's seed 1: the start faces away from the goal, 40 m off, and a round
+    obstacle lies where the cheapest turn would go. The plan rolls 42 m backwards (cost 50.9 by the planner's own
+    measure); a forward path costs 48.3. The forward-only search from the start alone spent its 3 000 expansions
+    beside that obstacle; its goal side, searched in turns with it since issue 21's eighteenth round, finds the
+    path, and the plan rolls forwards."""
+    grid = load_map("maps/real/100by100_20.yaml")
+    start, goal = (46.325, 83.475, -2.7498386939664643), (62.725, 46.125, 2.2156574695706945)
+    o = PlannerOptions()
+    planner = HybridAStar(grid, ROBOT, o)
+    backwards = HybridAStar(grid, ROBOT, PlannerOptions(prefer_forward=False)).plan(start, goal)
+    result = planner.plan(start, goal)
+    assert check_path(grid, ROBOT, result.states, start, goal) == []
+    assert _backwards_m(backwards.states) > 0.9 * backwards.length_m
+    assert result.extra.get("forward_alternative") is True and _backwards_m(result.states) == 0.0
+    assert _cost(result.states, o) < _cost(backwards.states, o) - 1.0
+    assert result.extra["forward_check_expansions"] > 0
+    assert result.min_clearance_m >= ROBOT.preferred_clearance_m
+
+
+def test_a_forward_path_that_grazes_an_obstacle_does_not_replace_a_roomy_one(monkeypatch) -> None:
+    """100by100_20#7 of the real-map bench's seed 2: the forward-only search finds a forward path that costs less
+    (68.95 m against 69.16 m rolled backwards, both × the reverse penalty) by joining its two sides with a shot
+    that passes 1.4 cm from an obstacle (meet.py's joins keep no room). The backwards path keeps 0.39 m: the
+    forward path is taken only when it keeps as much, or LEAST_KEPT_MARGIN_M."""
+    from planner.hybrid_astar import search
+
+    grid = load_map("maps/real/100by100_20.yaml")
+    start, goal = (85.775, 29.075, 2.1060181869358994), (41.625, 75.725, -1.909020745000034)
+    result = HybridAStar(grid, ROBOT).plan(start, goal)
+    assert check_path(grid, ROBOT, result.states, start, goal) == []
+    assert "forward_alternative" not in result.extra and result.extra["forward_check_expansions"] > 0
+    assert _backwards_m(result.states) > 0.9 * result.length_m
+    assert result.min_clearance_m >= ROBOT.preferred_clearance_m
+    # without the room rule the grazing forward path is the plan
+    monkeypatch.setattr(search.HybridAStar, "_least_margin", lambda self, start, motions: 1.0)
+    grazing = HybridAStar(grid, ROBOT).plan(start, goal)
+    assert grazing.extra.get("forward_alternative") is True
+    assert grazing.min_clearance_m < 0.05
 
 
 def test_a_manoeuvre_in_a_path_that_rolls_backwards_is_shortcut_with_a_reverse_shot() -> None:
