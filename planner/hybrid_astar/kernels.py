@@ -41,16 +41,18 @@ N_COUNTERS = 15
  P_STEP, P_SPACING, P_NON_STRAIGHT, P_CHANGE, P_REVERSE, P_SWITCH, P_COST_PENALTY, P_PROX_RANGE, P_GREED,
  P_SHOT_RATIO, P_MAX_ROLL, P_USE_DUBINS, P_ALLOW_REVERSE, P_N_YAW, P_USE_RS, P_RS_CELL, P_RS_HALF,
  P_PREFERRED, P_REACH, P_BEST_H, P_REJECT, P_CLOSER_H, P_HELD_COST, P_BACK_SHARE, P_BOUND, P_LONG,
- P_GCOS, P_GSIN, P_FALL_WAIT, P_BACK_WAIT, P_HOLD_WAIT, P_CONVEX, P_GENTLE_N, P_ROOT_SHOT, P_GENTLE) = range(49)
+ P_GCOS, P_GSIN, P_FALL_WAIT, P_BACK_WAIT, P_HOLD_WAIT, P_CONVEX, P_GENTLE_N, P_ROOT_SHOT, P_CLOSED_CELL,
+ P_GENTLE) = range(50)
 # P_GCOS, P_GSIN: cos and sin of P_GYAW (for the Reeds–Shepp table's frame); P_FALL_WAIT: expansions a fallback
 # shot (3d) waits for one that keeps the room asked, 0 = no fallback shots; P_BACK_WAIT: a fallback shot that rolls
 # the path mostly backwards waits this × P_FALL_WAIT, 0 = none is kept; P_HOLD_WAIT: expansions a held-back shot (3c)
 # waits for a path that rolls forwards more; P_CONVEX: clearance.convex_turn of the footprint polygon (0, the old
 # test, when left unset); P_GENTLE_N: how many turns gentler than ±P_MAX_ROLL at radius P_RHO a shortcut may be
 # rolled with instead (:func:`_gentler`), as pairs (radius, roll) from P_GENTLE on, gentlest first; P_ROOT_SHOT: 1 =
-# the first node's cheapest Reeds–Shepp shot (SHOT_WEIGHTED) is taken even when it rolls mostly backwards (3c)
+# the first node's cheapest Reeds–Shepp shot (SHOT_WEIGHTED) is taken even when it rolls mostly backwards (3c);
+# P_CLOSED_CELL: the side (m) of the closed set's square cells, a whole number of map cells
 MAX_GENTLE = 4
-N_PARAMS = 49 + 2 * MAX_GENTLE
+N_PARAMS = 50 + 2 * MAX_GENTLE
 BEST_SHOT_EVERY = 256  # reversing: every this many expansions, a Reeds–Shepp shot from the closest node if new
 NEAR_TIE = 1.05  # the second / third cheapest Reeds–Shepp word is shot only within this ratio of the cheapest
 MAX_SHOT_SEGS = 6  # a Dubins shot has 3 segments, a Reeds–Shepp shot up to 5
@@ -260,8 +262,8 @@ def _heuristic(htab: np.ndarray, rs: np.ndarray, p: np.ndarray, x: float, y: flo
 
 @njit_leaf
 def _closed_key(p: np.ndarray, w: int, x: float, y: float, yaw: float, rb: int, n_rb: int) -> int:
-    ix = int(math.floor((x - p[P_OX]) / p[P_RES]))
-    iy = int(math.floor((y - p[P_OY]) / p[P_RES]))
+    ix = int(math.floor((x - p[P_OX]) / p[P_CLOSED_CELL]))
+    iy = int(math.floor((y - p[P_OY]) / p[P_CLOSED_CELL]))
     n_yaw = int(p[P_N_YAW])
     a = yaw - 2.0 * math.pi * math.floor(yaw / (2.0 * math.pi))
     yb = int(a / (2.0 * math.pi) * n_yaw) % n_yaw

@@ -80,7 +80,9 @@ class GoalSide:
     """The reverse problem's search, stepped a chunk at a time; :attr:`motions` is the path it found (from the
     start to the goal), :attr:`exhausted` says it ran out of states (the goal pose is a dead end).
 
-    ``new_search(planner, start, goal, heuristic, options, reverse)`` makes the search (search.py's ``_Search``).
+    ``new_search(planner, start, goal, heuristic, options, reverse)`` makes the search (search.py's ``_Search``);
+    ``reverse`` (default the planner's) says whether its motions may roll backwards: the forward-only alternative's
+    goal side rolls forwards only (:meth:`HybridAStar._forward_both_ends`).
     """
 
     def __init__(self, planner: Any, start: Pose, goal: Pose, o: Any, new_search: Callable[..., Any],

@@ -212,8 +212,10 @@ def test_the_held_back_shot_is_the_path_when_the_search_runs_out(monkeypatch) ->
 def test_the_starts_cheapest_shot_is_the_path_at_once(monkeypatch) -> None:
     """depot#1 of the real bench's seed-1 draw: in the open, the goal 8 m behind, facing across. The shot from the
     start by the word cheapest under the search's weights rolls mostly backwards; no path that turns round can cost
-    less (it is the cheapest path with no obstacles at all), so the plan takes it at the first expansion instead of
-    holding it while the search looks for one (634 expansions), for the same path."""
+    less (it is the cheapest car's path with no obstacles at all, and the sphere's differ from the car's only by
+    their sideways shifts), so the plan takes it at the first expansion instead of holding it while the search
+    looks for one (634 expansions; since the closed set's cells follow the step, a few hundred, for a path 6 cm
+    shorter: within the shifts)."""
     grid = load_map("maps/real/depot.yaml")
     start, goal = (11.425, 7.125, -0.14404827093188777), (4.425, 11.725, -1.7435407827295963)
     planner = HybridAStar(grid, ROBOT, PlannerOptions())
@@ -232,14 +234,15 @@ def test_the_starts_cheapest_shot_is_the_path_at_once(monkeypatch) -> None:
     assert taken.expansions == 1 and "held_shot_taken" not in taken.extra and taken.analytic_segments > 0
     assert "forward_alternative_expansions" not in taken.extra  # no forward path can cost less either
     assert held.expansions > 100
-    assert taken.length_m == pytest.approx(held.length_m, abs=1e-3)
-    assert taken.min_clearance_m == pytest.approx(held.min_clearance_m, abs=1e-3)
-    # the path's cost by the planner's measure is the free-space cheapest word's (within the sphere's roll shifts)
+    # the path's cost by the planner's measure is the free-space cheapest word's (within the sphere's roll shifts) ...
     moving = np.sign(taken.states[1:, 4][taken.states[1:, 4] != 0])
     cost = (taken.length_m + (o.reverse_penalty - 1.0) * _backwards_m(taken.states)
             + o.switch_cost_m * int(np.count_nonzero(np.diff(moving))))
     shifts = ROBOT.radius_m * float(np.abs(np.diff(taken.states[:, 3])).sum())  # sideways, at the roll changes
     assert cheapest <= cost <= cheapest + o.reverse_penalty * shifts + 1e-3
+    # ... and what the search finds when it holds the shot is no shorter by more than those shifts
+    assert held.length_m >= taken.length_m - shifts
+    assert taken.min_clearance_m >= held.min_clearance_m - 0.05
 
 
 @pytest.mark.parametrize("name, start, goal, held_cheaper, turned", [
