@@ -73,3 +73,29 @@ def test_the_bitset_and_the_hash_set_make_the_same_search(monkeypatch) -> None:
         results.append(planner.plan(start, goal))
     assert results[0].expansions == results[1].expansions > 1000
     np.testing.assert_array_equal(results[0].states, results[1].states)
+
+
+def test_the_closed_cells_are_half_a_step_in_whole_map_cells() -> None:
+    """Issue 21's eighteenth round: the closed set's cell is the map cell × the whole number nearest half the step
+    (at least one), so two nodes a step apart never share a cell while states a few centimetres apart do; at 72
+    heading bins, or with a step set by option, it is the map cell."""
+    import math
+
+    from planner.hybrid_astar import kernels
+
+    robot = load_robot("zju-60")
+    grid = OccupancyGrid.from_occupied(np.zeros((100, 100), dtype=bool), 0.05, name="open")
+    fine = OccupancyGrid.from_occupied(np.zeros((100, 100), dtype=bool), 0.03, name="fine")
+    default = HybridAStar(grid, robot)
+    assert default.resolved_step_m == robot.min_turning_radius_m * 2 * math.pi / 36  # 0.195 m
+    assert default.closed_cell_m == 2 * 0.05
+    assert HybridAStar(fine, robot).closed_cell_m == 3 * 0.03  # 0.195 / 0.06 = 3.3
+    assert HybridAStar(grid, robot, PlannerOptions(n_yaw_bins=72)).closed_cell_m == 0.05  # 0.098 / 0.1 = 0.98
+    assert HybridAStar(grid, robot, PlannerOptions(step_m=2.0)).closed_cell_m == 0.05
+    p = default._params((4.0, 4.0, 0.0), True)
+    assert p[kernels.P_CLOSED_CELL] == default.closed_cell_m
+    w, step = grid.width, default.resolved_step_m
+    key = lambda x, y: kernels._closed_key(p, w, x, y, 0.3, 1, 3)  # noqa: E731
+    assert key(2.01, 2.01) == key(2.09, 2.09)  # two map cells apart each way: one closed cell
+    for dx, dy in ((step, 0.0), (0.0, step), (step * math.cos(0.8), step * math.sin(0.8))):
+        assert key(2.01, 2.01) != key(2.01 + dx, 2.01 + dy)  # a step apart: never the same
