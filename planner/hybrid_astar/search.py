@@ -709,7 +709,7 @@ class HybridAStar:
                 analytic = better.analytic
                 extra.pop("forward_alternative", None)
         poses = self._densify(start, motions, o.state_spacing_m)
-        fine = self._densify(start, motions, self.grid.resolution_m / 4)
+        fine = self._checked_poses(start, motions)
         margins, measured = self.clearance.path_margins(self.footprint, self.polygon, fine[:, :3])
         if margins.min() < 0:
             raise NoValidPathFound("internal check failed: the exact re-check of the final path found a collision")
@@ -904,7 +904,7 @@ class HybridAStar:
     def _least_margin(self, start: Pose, motions: list[tuple[float, float, float]]) -> float:
         """The least footprint margin along the path at the final check's spacing (the covering circles' margin, a
         lower bound of its clearance, 0 where only the exact polygon fits: :meth:`ClearanceMap.footprint_margins`)."""
-        fine = self._densify(start, motions, self.grid.resolution_m / 4)
+        fine = self._checked_poses(start, motions)
         return float(self.clearance.footprint_margins(self.footprint, self.polygon, fine[:, :3]).min())
 
     def _forward_both_ends(self, run: _Search, start: Pose, goal: Pose, o: PlannerOptions, clock: Clock, total: int,
@@ -1004,7 +1004,7 @@ class HybridAStar:
         if (math.hypot(end[0] - goal[0], end[1] - goal[1]) > o.goal_tolerance_m
                 or abs(wrap(float(end[2]) - goal[2])) > o.goal_tolerance_yaw_rad):
             return False
-        fine = self._densify(start, motions, self.grid.resolution_m / 4)
+        fine = self._checked_poses(start, motions)
         return bool(self.clearance.path_margins(self.footprint, self.polygon, fine[:, :3])[0].min() >= 0)
 
     def _knots(self, start: Pose, motions: list[tuple[float, float, float]], roll: float = 0.0) -> np.ndarray:
@@ -1067,6 +1067,11 @@ class HybridAStar:
         step = self.resolved_step_m
         return [(float(node_f[k, 3]), float(self.curvatures[node_i[k, 1]]), float(node_i[k, 2]) * step)
                 for k in chain]
+
+    def _checked_poses(self, start: Pose, motions: list[tuple[float, float, float]]) -> np.ndarray:
+        """The poses the exact check of a path looks at: :meth:`_densify` at a quarter cell (the final check, a path
+        found some other way than the search's goal test, the forward alternative's room rule)."""
+        return self._densify(start, motions, self.grid.resolution_m / 4)
 
     def _densify(self, start: Pose, motions: list[tuple[float, float, float]], spacing: float) -> np.ndarray:
         """Dense poses (x, y, yaw, roll, direction) along the motions, ≤ ``spacing`` apart."""
