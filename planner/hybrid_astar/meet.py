@@ -76,6 +76,21 @@ def index_nodes(node_f: np.ndarray, node_i: np.ndarray, lo: int, hi: int, turn: 
 
 
 @njit_leaf
+def unindex_nodes(node_f: np.ndarray, node_i: np.ndarray, hi: int, turn: float, upright_roll: int,
+                  ox: float, oy: float, cell: float, nx: int, ny: int, nyaw: int,
+                  best_node: np.ndarray, best_g: np.ndarray) -> None:
+    """Empty the buckets that :func:`index_nodes` put nodes [0, ``hi``) into (same ``turn`` and ``upright_roll``),
+    so that the tables are as new again: a node's bucket is a function of its pose."""
+    for k in range(hi):
+        if upright_roll >= 0 and node_i[k, 1] != upright_roll:
+            continue
+        b = _bucket(node_f[k, 0], node_f[k, 1], node_f[k, 2] + turn, ox, oy, cell, nx, ny, nyaw, 0, 0)
+        if b >= 0:
+            best_g[b] = np.inf
+            best_node[b] = -1
+
+
+@njit_leaf
 def find_pairs(node_f: np.ndarray, node_i: np.ndarray, lo: int, hi: int, turn: float, upright_roll: int,
                other_f: np.ndarray, other_turn: float, other_node: np.ndarray,
                ox: float, oy: float, cell: float, nx: int, ny: int, nyaw: int, rho: float, max_len: float,
@@ -155,6 +170,7 @@ def warm_up() -> None:
     node, g = np.full(YAW_BINS, -1, dtype=np.int64), np.full(YAW_BINS, np.inf)
     geo = (0.0, 0.0, CELL_M, 1, 1, YAW_BINS)
     index_nodes(node_f, node_i, 0, 1, math.pi, 0, *geo, node, g)
+    unindex_nodes(node_f, node_i, 1, math.pi, 0, *geo, node, g)
     out_a, out_b, out_cost = np.zeros(1, dtype=np.int64), np.zeros(1, dtype=np.int64), np.zeros(1)
     find_pairs(node_f, node_i, 0, 1, 0.0, -1, node_f, math.pi, node, *geo, 1.0, MAX_SHOT_M, out_a, out_b, out_cost)
     find_turn(node, node, node_f, node_i, 0, YAW_BINS, np.zeros((1, 1)), 0.0, 0.0, 1.0, np.zeros(1, dtype=np.bool_))
@@ -166,6 +182,10 @@ class Meeting:
     ``forward`` and ``back`` are the two searches (search.py's ``_Search``: ``node_f``, ``node_i``, ``counters``,
     ``p``); :meth:`round` indexes their new nodes, ranks new pairs and shoots at the best untried ones, returning
     the forward node, the goal-side node and the shot's segments when one is free.
+
+    The four bucket tables cover the map (on a 100 m map 1.4 M buckets each, 46 MB in all: filling them took
+    1.3 ms a meeting, issue 21's nineteenth round). A meeting takes them from its planner's ``meet_pool`` when it
+    has a set, and gives them back when it is dropped, emptied where its nodes went (:func:`unindex_nodes`).
     """
 
     def __init__(self, planner: Any) -> None:
@@ -175,12 +195,14 @@ class Meeting:
         self.nx = max(1, math.ceil(grid.width * grid.resolution_m / CELL_M))
         self.ny = max(1, math.ceil(grid.height * grid.resolution_m / CELL_M))
         n = self.nx * self.ny * YAW_BINS
-        self.f_node = np.full(n, -1, dtype=np.int64)
-        self.f_g = np.full(n, np.inf)
-        self.b_node = np.full(n, -1, dtype=np.int64)
-        self.b_g = np.full(n, np.inf)
+        tables = planner.meet_pool.take()
+        if tables is None or tables[0].size != n:
+            tables = (np.full(n, -1, dtype=np.int64), np.full(n, np.inf), np.full(n, -1, dtype=np.int64),
+                      np.full(n, np.inf))
+        self.f_node, self.f_g, self.b_node, self.b_g = tables
         self.f_done = 0  # nodes of each tree indexed so far
         self.b_done = 0
+        self._trees: tuple[Any, Any] | None = None  # the two searches, to empty the tables when done
         self.pending: list[tuple[float, int, int]] = []
         self.tried: set[tuple[int, int]] = set()
         self.upright = int(planner.options.n_rolls // 2)
@@ -189,6 +211,19 @@ class Meeting:
         self.out_cost = np.zeros(BEST_PER_ROUND)
         self.seg_roll, self.seg_curv, self.seg_len = (np.zeros(kernels.MAX_SHOT_SEGS) for _ in range(3))
         self.shots = 0
+
+    def __del__(self) -> None:
+        # the tables go back to the planner's pool, emptied where this meeting's nodes went
+        try:
+            if self._trees is not None:
+                forward, back = self._trees
+                geo = (self.ox, self.oy, CELL_M, self.nx, self.ny, YAW_BINS)
+                unindex_nodes(forward.node_f, forward.node_i, self.f_done, 0.0, -1, *geo, self.f_node, self.f_g)
+                unindex_nodes(back.node_f, back.node_i, self.b_done, math.pi, self.upright, *geo, self.b_node,
+                              self.b_g)
+            self.planner.meet_pool.give_back((self.f_node, self.f_g, self.b_node, self.b_g))
+        except Exception:  # at interpreter exit the modules may be gone: the tables are then simply dropped
+            pass
 
     def _collect(self, n: int) -> None:
         for m in range(n):
@@ -200,6 +235,9 @@ class Meeting:
         """Index both trees' new nodes, then shoot at the best untried pairs; (forward node, goal-side node,
         segments written to ``seg_*``) for the first free shot, else None."""
         pl = self.planner
+        if self._trees is None:
+            self._trees = (forward, back)
+        assert self._trees[0] is forward and self._trees[1] is back, "a meeting joins the same two searches"
         geo = (self.ox, self.oy, CELL_M, self.nx, self.ny, YAW_BINS)
         f_hi = int(forward.counters[kernels.C_NODES])
         b_hi = int(back.counters[kernels.C_NODES])
@@ -246,4 +284,4 @@ class Meeting:
         return None if best is None else best[1:]
 
 
-__all__ = ["CELL_M", "YAW_BINS", "Meeting", "find_pairs", "find_turn", "index_nodes", "warm_up"]
+__all__ = ["CELL_M", "YAW_BINS", "Meeting", "find_pairs", "find_turn", "index_nodes", "unindex_nodes", "warm_up"]

@@ -100,6 +100,23 @@ def test_a_manoeuvre_into_the_goal_is_joined_early():
     assert joined.length_m < 22.0  # 20.89 m
 
 
+def test_a_meetings_bucket_tables_go_back_to_the_pool_empty_and_a_plan_with_them_is_the_plan_with_new_ones():
+    grid = load_map("maps/real/pockets.yaml")
+    start, goal = (6.125, 10.075, 2.9092350581717223), (19.325, 14.725, 2.599295721958983)  # joined (above)
+    pooled = HybridAStar(grid, ROBOT)
+    assert len(pooled.meet_pool) == 0
+    first = pooled.plan(start, goal)
+    assert first.extra["found_from"] == "both" and len(pooled.meet_pool) == 1
+    tables = pooled.meet_pool.take()
+    f_node, f_g, b_node, b_g = tables
+    assert (f_node == -1).all() and (b_node == -1).all() and np.isinf(f_g).all() and np.isinf(b_g).all()
+    pooled.meet_pool.give_back(tables)
+    again, fresh = pooled.plan(start, goal), HybridAStar(grid, ROBOT).plan(start, goal)
+    assert pooled.meet_pool.take()[0] is f_node  # the second plan met with the pooled tables
+    for result in (again, fresh):
+        assert result.expansions == first.expansions and np.array_equal(result.states, first.states)
+
+
 def test_a_problem_solved_before_the_join_starts_is_unchanged(monkeypatch):
     # bays#9 of the real-map bench (seed 0): the goal side finds it in a few thousand expansions
     grid = load_map("maps/real/bays.yaml")
