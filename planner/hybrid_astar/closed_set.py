@@ -13,15 +13,13 @@ A search holds both arrays; the one not in use is empty (``bits``) or of one slo
 holds the keys, EMPTY (the least int64, which no key reaches) where empty; its size is a power of two.
 
 Zeroing a bitset of several megabytes took 0.25–0.35 ms (11.7 MB on depot), a sixth of a short plan's time there
-(issue 21, fifteenth round): a planner keeps the bitsets of its finished searches in a :class:`Pool`, each cleared
-where its search closed keys (:func:`planner.hybrid_astar.kernels.clear_closed`), and a new search takes one. (Its
-meet-in-the-middle bucket tables are pooled the same way: :class:`planner.hybrid_astar.meet.Meeting`.)
+(issue 21, fifteenth round): a planner keeps the bitsets of its finished searches in a :class:`BitsetPool`, each cleared
+where its search closed keys (:func:`planner.hybrid_astar.kernels.clear_closed`), and a new search takes one.
 """
 
 from __future__ import annotations
 
 import threading
-from typing import Generic, TypeVar
 
 import numpy as np
 from numba import njit
@@ -30,7 +28,6 @@ from planner.jit import njit_leaf
 
 DENSE_MAX_MB = 16.0  # maps whose bitset would exceed this use the hash set (measured: docs/planning.md)
 EMPTY = -(2**63)
-T = TypeVar("T")
 _MUL = -7046029254386353131  # 0x9E3779B97F4A7C15 (2^64 / golden ratio) as int64: Fibonacci hashing
 _SHIFT = 29  # the product's bits from here up index the table (the low bits of a product mix poorly)
 
@@ -44,7 +41,7 @@ def uses_bitset(n_keys: int) -> bool:
     return dense_bytes(n_keys) <= DENSE_MAX_MB * 2**20
 
 
-def new_sets(n_keys: int, capacity: int, pool: Pool[np.ndarray] | None = None) -> tuple[np.ndarray, np.ndarray]:
+def new_sets(n_keys: int, capacity: int, pool: BitsetPool | None = None) -> tuple[np.ndarray, np.ndarray]:
     """(bits, table) for a search on a map of ``n_keys`` keys whose node storage holds ``capacity`` nodes; a
     bitset from ``pool`` when it has one (all zero, as a new one)."""
     if uses_bitset(n_keys):
@@ -55,29 +52,28 @@ def new_sets(n_keys: int, capacity: int, pool: Pool[np.ndarray] | None = None) -
     return np.zeros(0, dtype=np.uint8), new_table(capacity)
 
 
-class Pool(Generic[T]):
-    """Cleared arrays of finished searches, for the next searches on the same map (thread-safe): closed-set
-    bitsets, and meet.py's bucket tables.
+class BitsetPool:
+    """Cleared bitsets of finished searches, for the next searches on the same map (thread-safe).
 
     At most ``keep`` are kept (a plan runs up to two searches at once: the start's and the goal side's or the
-    forward alternative); one that is not given back is left to the garbage collector as before.
+    forward alternative); a search whose bitset is not given back leaves it to the garbage collector as before.
     """
 
     def __init__(self, keep: int = 2) -> None:
         self.keep = keep
-        self._free: list[T] = []
+        self._free: list[np.ndarray] = []
         self._lock = threading.Lock()
 
-    def take(self) -> T | None:
-        """A cleared item (all zero, or as new), or None when there is none."""
+    def take(self) -> np.ndarray | None:
+        """A bitset that is all zero, or None when there is none."""
         with self._lock:
             return self._free.pop() if self._free else None
 
-    def give_back(self, item: T) -> None:
-        """Keep ``item``, which the caller has cleared, for a later search (unless ``keep`` are kept already)."""
+    def give_back(self, bits: np.ndarray) -> None:
+        """Keep ``bits``, which the caller has cleared, for a later search (unless ``keep`` are kept already)."""
         with self._lock:
             if len(self._free) < self.keep:
-                self._free.append(item)
+                self._free.append(bits)
 
     def __len__(self) -> int:
         return len(self._free)

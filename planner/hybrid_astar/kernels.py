@@ -828,7 +828,7 @@ def clear_closed(bits: np.ndarray, p: np.ndarray, w: int, node_f: np.ndarray, no
                  roll_bins: np.ndarray, n_roll_bins: int) -> None:
     """Zero every byte of the bitset ``bits`` that a key of the search's nodes 0 … ``n_nodes`` − 1 falls in:
     :func:`search_chunk` closes only the keys of nodes it popped (1.), and a node's key is its stored pose's, so
-    afterwards the whole bitset is zero (:class:`planner.hybrid_astar.closed_set.Pool`)."""
+    afterwards the whole bitset is zero (:class:`planner.hybrid_astar.closed_set.BitsetPool`)."""
     for k in range(n_nodes):
         key = _closed_key(p, w, node_f[k, 0], node_f[k, 1], node_f[k, 2], roll_bins[node_i[k, 1]], n_roll_bins)
         if 0 <= key >> 3 < bits.size:

@@ -10,7 +10,12 @@ forward chain to its node, the shot, and the goal side's chain run backwards (:f
 to the goal.
 
 Each tree's nodes are bucketed by (cell of :data:`CELL_M`, heading bin of 2π / :data:`YAW_BINS`), headings in the
-forward problem's frame (a goal-side node's turned by π); a bucket keeps its cheapest node (least g). After each
+forward problem's frame (a goal-side node's turned by π); a bucket keeps its cheapest node (least g). A tree's
+buckets are a hash map (:class:`Buckets`: the closed set's open addressing, :mod:`closed_set`, with the node in a
+parallel array), sized by the tree, not the map: until issue 21's nineteenth round they were four arrays over the
+whole map (1.4 M buckets each on a 100 m map, 46 MB a meeting), whose filling took 1.3 ms a meeting in a warm
+process and up to 7 ms an array where its pages were new (the real-map bench: 100by100_20#7 of seed 1, 107 ms,
+of which 10 in the search loop). After each
 round of chunks, every new node of one tree looks up the other tree's buckets in the same heading bin and the
 3 × 3 cells around its own; a pair is ranked by g_forward + an estimate of the shot + g_goal-side, and the best
 :data:`TRIES_PER_ROUND` pairs not tried before are shot at (:func:`kernels.try_shot`, collision-checked like every
@@ -35,7 +40,7 @@ from typing import Any
 
 import numpy as np
 
-from planner.hybrid_astar import kernels
+from planner.hybrid_astar import closed_set, kernels
 from planner.hybrid_astar.reeds_shepp import MAX_SHOT_M
 from planner.jit import njit_leaf
 from planner.kinematics import wrap
@@ -61,38 +66,53 @@ def _bucket(x: float, y: float, yaw: float, ox: float, oy: float, cell: float, n
 
 
 @njit_leaf
+def _node_of(keys: np.ndarray, nodes: np.ndarray, b: int) -> int:
+    """The node kept in bucket ``b``, -1 when it holds none."""
+    i = closed_set._slot(keys, b)
+    return nodes[i] if keys[i] == b else -1
+
+
+@njit_leaf
 def index_nodes(node_f: np.ndarray, node_i: np.ndarray, lo: int, hi: int, turn: float, upright_roll: int,
                 ox: float, oy: float, cell: float, nx: int, ny: int, nyaw: int,
-                best_node: np.ndarray, best_g: np.ndarray) -> None:
-    """Put nodes [lo, hi) into the buckets (heading turned by ``turn``), each bucket keeping its least-g node;
-    ``upright_roll`` ≥ 0 keeps only nodes holding that roll index."""
+                keys: np.ndarray, nodes: np.ndarray, gs: np.ndarray) -> int:
+    """Put nodes [lo, hi) into the buckets (heading turned by ``turn``), each bucket keeping its least-g node (g as
+    it was when the node was put in: ``gs``); ``upright_roll`` ≥ 0 keeps only nodes holding that roll index.
+    ``keys`` / ``nodes`` / ``gs`` is the hash map (room for hi − lo more buckets at a load of at most one half:
+    :meth:`Buckets.room_for`). Returns the buckets added."""
+    added = 0
     for k in range(lo, hi):
         if upright_roll >= 0 and node_i[k, 1] != upright_roll:
             continue
         b = _bucket(node_f[k, 0], node_f[k, 1], node_f[k, 2] + turn, ox, oy, cell, nx, ny, nyaw, 0, 0)
-        if b >= 0 and node_f[k, 4] < best_g[b]:
-            best_g[b] = node_f[k, 4]
-            best_node[b] = k
+        if b < 0:
+            continue
+        i = closed_set._slot(keys, b)
+        if keys[i] != b:
+            keys[i] = b
+            added += 1
+        elif node_f[k, 4] >= gs[i]:
+            continue
+        nodes[i] = k
+        gs[i] = node_f[k, 4]
+    return added
 
 
 @njit_leaf
-def unindex_nodes(node_f: np.ndarray, node_i: np.ndarray, hi: int, turn: float, upright_roll: int,
-                  ox: float, oy: float, cell: float, nx: int, ny: int, nyaw: int,
-                  best_node: np.ndarray, best_g: np.ndarray) -> None:
-    """Empty the buckets that :func:`index_nodes` put nodes [0, ``hi``) into (same ``turn`` and ``upright_roll``),
-    so that the tables are as new again: a node's bucket is a function of its pose."""
-    for k in range(hi):
-        if upright_roll >= 0 and node_i[k, 1] != upright_roll:
-            continue
-        b = _bucket(node_f[k, 0], node_f[k, 1], node_f[k, 2] + turn, ox, oy, cell, nx, ny, nyaw, 0, 0)
-        if b >= 0:
-            best_g[b] = np.inf
-            best_node[b] = -1
+def rehash(keys: np.ndarray, nodes: np.ndarray, gs: np.ndarray, out_keys: np.ndarray, out_nodes: np.ndarray,
+           out_gs: np.ndarray) -> None:
+    """Put every bucket of ``keys`` / ``nodes`` / ``gs`` into the empty (larger) ``out_*``."""
+    for i in range(keys.size):
+        if keys[i] != closed_set.EMPTY:
+            j = closed_set._slot(out_keys, keys[i])
+            out_keys[j] = keys[i]
+            out_nodes[j] = nodes[i]
+            out_gs[j] = gs[i]
 
 
 @njit_leaf
 def find_pairs(node_f: np.ndarray, node_i: np.ndarray, lo: int, hi: int, turn: float, upright_roll: int,
-               other_f: np.ndarray, other_turn: float, other_node: np.ndarray,
+               other_f: np.ndarray, other_turn: float, other_keys: np.ndarray, other_nodes: np.ndarray,
                ox: float, oy: float, cell: float, nx: int, ny: int, nyaw: int, rho: float, max_len: float,
                out_a: np.ndarray, out_b: np.ndarray, out_cost: np.ndarray) -> int:
     """For each node of [lo, hi) (heading turned by ``turn``; only roll index ``upright_roll`` if ≥ 0), the other
@@ -111,7 +131,7 @@ def find_pairs(node_f: np.ndarray, node_i: np.ndarray, lo: int, hi: int, turn: f
                 b = _bucket(x, y, yaw, ox, oy, cell, nx, ny, nyaw, dx, dy)
                 if b < 0:
                     continue
-                j = other_node[b]
+                j = _node_of(other_keys, other_nodes, b)
                 if j < 0:
                     continue
                 d = math.hypot(other_f[j, 0] - x, other_f[j, 1] - y)
@@ -134,32 +154,64 @@ def find_pairs(node_f: np.ndarray, node_i: np.ndarray, lo: int, hi: int, turn: f
 
 
 @njit_leaf
-def find_turn(f_node: np.ndarray, b_node: np.ndarray, f_node_f: np.ndarray, f_node_i: np.ndarray, upright: int,
-              nyaw: int, clear: np.ndarray, ox: float, oy: float, res: float, tried: np.ndarray
-              ) -> tuple[int, int, int]:
+def find_turn(f_keys: np.ndarray, f_nodes: np.ndarray, b_keys: np.ndarray, b_nodes: np.ndarray,
+              f_node_f: np.ndarray, f_node_i: np.ndarray, upright: int, nyaw: int, clear: np.ndarray, ox: float,
+              oy: float, res: float, tried: np.ndarray) -> tuple[int, int, int]:
     """Where the forward tree and the goal side roll the same way in opposite directions: the (forward node,
     goal-side node, cell) of the bucket pair in one cell whose forward node is upright and whose heading bin is
     opposite to the goal-side node's (both in the forward frame), in the untried cell (``tried``) with the most
-    stored clearance under the forward node; (-1, -1, -1) when there is none."""
+    stored clearance under the forward node, the least bucket index among equals; (-1, -1, -1) when there is
+    none."""
     best = -1.0
+    best_b = -1
     out_i, out_j, out_cell = -1, -1, -1
     half = nyaw // 2
-    for b in range(f_node.size):
-        i = f_node[b]
-        if i < 0 or f_node_i[i, 1] != upright:
+    for s in range(f_keys.size):
+        b = f_keys[s]
+        if b == closed_set.EMPTY:
+            continue
+        i = f_nodes[s]
+        if f_node_i[i, 1] != upright:
             continue
         cell = b // nyaw
         if tried[cell]:
             continue
-        j = b_node[cell * nyaw + (b % nyaw + half) % nyaw]
+        j = _node_of(b_keys, b_nodes, cell * nyaw + (b % nyaw + half) % nyaw)
         if j < 0:
             continue
         ix = int(math.floor((f_node_f[i, 0] - ox) / res))
         iy = int(math.floor((f_node_f[i, 1] - oy) / res))
-        if 0 <= ix < clear.shape[1] and 0 <= iy < clear.shape[0] and clear[iy, ix] > best:
+        if 0 <= ix < clear.shape[1] and 0 <= iy < clear.shape[0] and (
+                clear[iy, ix] > best or (clear[iy, ix] == best and b < best_b)):
             best = clear[iy, ix]
+            best_b = b
             out_i, out_j, out_cell = i, j, cell
     return out_i, out_j, out_cell
+
+
+class Buckets:
+    """One tree's buckets: a hash map from bucket index to the cheapest node in it and its g (``keys``, ``nodes``,
+    ``gs``), grown (rehashed) so that it is never more than half full."""
+
+    def __init__(self, capacity: int = 1024) -> None:
+        self.keys = closed_set.new_table(capacity)
+        self.nodes = np.full(self.keys.size, -1, dtype=np.int64)
+        self.gs = np.full(self.keys.size, np.inf)
+        self.count = 0
+
+    def room_for(self, more: int) -> None:
+        """Make room for ``more`` buckets at a load of at most one half."""
+        if 2 * (self.count + more) <= self.keys.size:
+            return
+        keys = closed_set.new_table(self.count + more)
+        nodes = np.full(keys.size, -1, dtype=np.int64)
+        gs = np.full(keys.size, np.inf)
+        rehash(self.keys, self.nodes, self.gs, keys, nodes, gs)
+        self.keys, self.nodes, self.gs = keys, nodes, gs
+
+    def node(self, b: int) -> int:
+        """The node kept in bucket ``b``, -1 when it holds none."""
+        return int(_node_of(self.keys, self.nodes, b))
 
 
 def warm_up() -> None:
@@ -167,13 +219,16 @@ def warm_up() -> None:
     :meth:`Meeting.round`, so that no plan's time limit is spent on it (a plan meets only after thousands of
     expansions, never in the search's own warm-up)."""
     node_f, node_i = np.zeros((1, 5)), np.zeros((1, 3), dtype=np.int64)
-    node, g = np.full(YAW_BINS, -1, dtype=np.int64), np.full(YAW_BINS, np.inf)
+    tree = Buckets(1)
     geo = (0.0, 0.0, CELL_M, 1, 1, YAW_BINS)
-    index_nodes(node_f, node_i, 0, 1, math.pi, 0, *geo, node, g)
-    unindex_nodes(node_f, node_i, 1, math.pi, 0, *geo, node, g)
+    index_nodes(node_f, node_i, 0, 1, math.pi, 0, *geo, tree.keys, tree.nodes, tree.gs)
+    tree.count = 1
+    tree.room_for(tree.keys.size)  # (rehash)
     out_a, out_b, out_cost = np.zeros(1, dtype=np.int64), np.zeros(1, dtype=np.int64), np.zeros(1)
-    find_pairs(node_f, node_i, 0, 1, 0.0, -1, node_f, math.pi, node, *geo, 1.0, MAX_SHOT_M, out_a, out_b, out_cost)
-    find_turn(node, node, node_f, node_i, 0, YAW_BINS, np.zeros((1, 1)), 0.0, 0.0, 1.0, np.zeros(1, dtype=np.bool_))
+    find_pairs(node_f, node_i, 0, 1, 0.0, -1, node_f, math.pi, tree.keys, tree.nodes, *geo, 1.0, MAX_SHOT_M, out_a,
+               out_b, out_cost)
+    find_turn(tree.keys, tree.nodes, tree.keys, tree.nodes, node_f, node_i, 0, YAW_BINS, np.zeros((1, 1)), 0.0, 0.0,
+              1.0, np.zeros(1, dtype=np.bool_))
 
 
 class Meeting:
@@ -182,10 +237,6 @@ class Meeting:
     ``forward`` and ``back`` are the two searches (search.py's ``_Search``: ``node_f``, ``node_i``, ``counters``,
     ``p``); :meth:`round` indexes their new nodes, ranks new pairs and shoots at the best untried ones, returning
     the forward node, the goal-side node and the shot's segments when one is free.
-
-    The four bucket tables cover the map (on a 100 m map 1.4 M buckets each, 46 MB in all: filling them took
-    1.3 ms a meeting, issue 21's nineteenth round). A meeting takes them from its planner's ``meet_pool`` when it
-    has a set, and gives them back when it is dropped, emptied where its nodes went (:func:`unindex_nodes`).
     """
 
     def __init__(self, planner: Any) -> None:
@@ -194,15 +245,10 @@ class Meeting:
         self.ox, self.oy = planner.clearance.origin_x, planner.clearance.origin_y
         self.nx = max(1, math.ceil(grid.width * grid.resolution_m / CELL_M))
         self.ny = max(1, math.ceil(grid.height * grid.resolution_m / CELL_M))
-        n = self.nx * self.ny * YAW_BINS
-        tables = planner.meet_pool.take()
-        if tables is None or tables[0].size != n:
-            tables = (np.full(n, -1, dtype=np.int64), np.full(n, np.inf), np.full(n, -1, dtype=np.int64),
-                      np.full(n, np.inf))
-        self.f_node, self.f_g, self.b_node, self.b_g = tables
+        self.forward = Buckets()  # the forward tree's buckets
+        self.back = Buckets()  # the goal side's
         self.f_done = 0  # nodes of each tree indexed so far
         self.b_done = 0
-        self._trees: tuple[Any, Any] | None = None  # the two searches, to empty the tables when done
         self.pending: list[tuple[float, int, int]] = []
         self.tried: set[tuple[int, int]] = set()
         self.upright = int(planner.options.n_rolls // 2)
@@ -211,19 +257,6 @@ class Meeting:
         self.out_cost = np.zeros(BEST_PER_ROUND)
         self.seg_roll, self.seg_curv, self.seg_len = (np.zeros(kernels.MAX_SHOT_SEGS) for _ in range(3))
         self.shots = 0
-
-    def __del__(self) -> None:
-        # the tables go back to the planner's pool, emptied where this meeting's nodes went
-        try:
-            if self._trees is not None:
-                forward, back = self._trees
-                geo = (self.ox, self.oy, CELL_M, self.nx, self.ny, YAW_BINS)
-                unindex_nodes(forward.node_f, forward.node_i, self.f_done, 0.0, -1, *geo, self.f_node, self.f_g)
-                unindex_nodes(back.node_f, back.node_i, self.b_done, math.pi, self.upright, *geo, self.b_node,
-                              self.b_g)
-            self.planner.meet_pool.give_back((self.f_node, self.f_g, self.b_node, self.b_g))
-        except Exception:  # at interpreter exit the modules may be gone: the tables are then simply dropped
-            pass
 
     def _collect(self, n: int) -> None:
         for m in range(n):
@@ -235,21 +268,22 @@ class Meeting:
         """Index both trees' new nodes, then shoot at the best untried pairs; (forward node, goal-side node,
         segments written to ``seg_*``) for the first free shot, else None."""
         pl = self.planner
-        if self._trees is None:
-            self._trees = (forward, back)
-        assert self._trees[0] is forward and self._trees[1] is back, "a meeting joins the same two searches"
         geo = (self.ox, self.oy, CELL_M, self.nx, self.ny, YAW_BINS)
         f_hi = int(forward.counters[kernels.C_NODES])
         b_hi = int(back.counters[kernels.C_NODES])
-        index_nodes(forward.node_f, forward.node_i, self.f_done, f_hi, 0.0, -1, *geo, self.f_node, self.f_g)
-        index_nodes(back.node_f, back.node_i, self.b_done, b_hi, math.pi, self.upright, *geo, self.b_node, self.b_g)
+        for tree, run, done, hi, turn, upright in ((self.forward, forward, self.f_done, f_hi, 0.0, -1),
+                                                   (self.back, back, self.b_done, b_hi, math.pi, self.upright)):
+            tree.room_for(hi - done)
+            tree.count += index_nodes(run.node_f, run.node_i, done, hi, turn, upright, *geo, tree.keys, tree.nodes,
+                                      tree.gs)
         rho = pl.robot.min_turning_radius_m
         # new forward nodes against the goal side's buckets, new goal-side nodes against the forward ones
-        n = find_pairs(forward.node_f, forward.node_i, self.f_done, f_hi, 0.0, -1, back.node_f, math.pi, self.b_node,
-                       *geo, rho, MAX_SHOT_M, self.out_a, self.out_b, self.out_cost)
+        n = find_pairs(forward.node_f, forward.node_i, self.f_done, f_hi, 0.0, -1, back.node_f, math.pi,
+                       self.back.keys, self.back.nodes, *geo, rho, MAX_SHOT_M, self.out_a, self.out_b, self.out_cost)
         self._collect(n)
         n = find_pairs(back.node_f, back.node_i, self.b_done, b_hi, math.pi, self.upright, forward.node_f, 0.0,
-                       self.f_node, *geo, rho, MAX_SHOT_M, self.out_b, self.out_a, self.out_cost)
+                       self.forward.keys, self.forward.nodes, *geo, rho, MAX_SHOT_M, self.out_b, self.out_a,
+                       self.out_cost)
         self._collect(n)
         self.f_done, self.b_done = f_hi, b_hi
         if len(self.pending) > PENDING_KEPT:
@@ -284,4 +318,4 @@ class Meeting:
         return None if best is None else best[1:]
 
 
-__all__ = ["CELL_M", "YAW_BINS", "Meeting", "find_pairs", "find_turn", "index_nodes", "unindex_nodes", "warm_up"]
+__all__ = ["CELL_M", "YAW_BINS", "Buckets", "Meeting", "find_pairs", "find_turn", "index_nodes", "warm_up"]

@@ -453,10 +453,8 @@ class HybridAStar:
         self.reverse = robot.reversible if o.allow_reverse is None else o.allow_reverse
         self.rs_table = rs_table_for(robot, o) if self.reverse else np.zeros((1, 1, 1))
         self.heuristic_factor = o.heuristic_downsample or auto_downsample(grid.data.shape)
-        #: closed-set bitsets of finished searches, cleared, for the next ones (closed_set.Pool)
-        self.bitset_pool: closed_set.Pool[np.ndarray] = closed_set.Pool()
-        #: meet.py's bucket tables of finished two-ended searches, cleared, for the next ones
-        self.meet_pool: closed_set.Pool[tuple[np.ndarray, ...]] = closed_set.Pool()
+        #: closed-set bitsets of finished searches, cleared, for the next ones (closed_set.BitsetPool)
+        self.bitset_pool = closed_set.BitsetPool()
         self._base_params: dict[tuple[bool, PlannerOptions], np.ndarray] = {}  # _params without the goal
         self._child_turns: dict[tuple[float, float], np.ndarray] = {}  # child_turns per (step, long steps)
         self._heuristics: OrderedDict[tuple[int, int], HolonomicHeuristic] = OrderedDict()

@@ -10,7 +10,7 @@ import pytest
 
 from planner.errors import NoValidPathFound, PlannerCancelled
 from planner.hybrid_astar import search, two_ended
-from planner.hybrid_astar.meet import CELL_M, YAW_BINS, find_pairs, find_turn, index_nodes
+from planner.hybrid_astar.meet import CELL_M, YAW_BINS, Buckets, find_pairs, find_turn, index_nodes
 from planner.hybrid_astar.search import HybridAStar, PlannerOptions
 from planner.maps.nav2 import load_map
 from planner.robot import load_robot
@@ -30,15 +30,23 @@ def _nodes(rows):
     return node_f, node_i
 
 
+def _index(tree, turn, upright):
+    """The buckets of a tree (node_f, node_i) on a 20 m × 20 m map, headings turned by ``turn``."""
+    buckets = Buckets(4)
+    buckets.room_for(len(tree[0]))
+    buckets.count += index_nodes(tree[0], tree[1], 0, len(tree[0]), turn, upright, *GEO, buckets.keys,
+                                 buckets.nodes, buckets.gs)
+    return buckets
+
+
+GEO = (0.0, 0.0, CELL_M, 40, 40, YAW_BINS)  # a 20 m × 20 m map
+
+
 def _pairs(forward, back):
-    nx = ny = 40  # a 20 m × 20 m map
-    geo = (0.0, 0.0, CELL_M, nx, ny, YAW_BINS)
-    b_node = np.full(nx * ny * YAW_BINS, -1, dtype=np.int64)
-    b_g = np.full(nx * ny * YAW_BINS, np.inf)
-    index_nodes(back[0], back[1], 0, len(back[0]), math.pi, UPRIGHT, *geo, b_node, b_g)
+    b = _index(back, math.pi, UPRIGHT)
     out_a, out_b, out_cost = np.zeros(8, np.int64), np.zeros(8, np.int64), np.zeros(8)
-    n = find_pairs(forward[0], forward[1], 0, len(forward[0]), 0.0, -1, back[0], math.pi, b_node, *geo, 1.0, 10.0,
-                   out_a, out_b, out_cost)
+    n = find_pairs(forward[0], forward[1], 0, len(forward[0]), 0.0, -1, back[0], math.pi, b.keys, b.nodes, *GEO, 1.0,
+                   10.0, out_a, out_b, out_cost)
     return sorted((int(out_a[m]), int(out_b[m]), float(out_cost[m])) for m in range(n))
 
 
@@ -100,23 +108,6 @@ def test_a_manoeuvre_into_the_goal_is_joined_early():
     assert joined.length_m < 22.0  # 20.89 m
 
 
-def test_a_meetings_bucket_tables_go_back_to_the_pool_empty_and_a_plan_with_them_is_the_plan_with_new_ones():
-    grid = load_map("maps/real/pockets.yaml")
-    start, goal = (6.125, 10.075, 2.9092350581717223), (19.325, 14.725, 2.599295721958983)  # joined (above)
-    pooled = HybridAStar(grid, ROBOT)
-    assert len(pooled.meet_pool) == 0
-    first = pooled.plan(start, goal)
-    assert first.extra["found_from"] == "both" and len(pooled.meet_pool) == 1
-    tables = pooled.meet_pool.take()
-    f_node, f_g, b_node, b_g = tables
-    assert (f_node == -1).all() and (b_node == -1).all() and np.isinf(f_g).all() and np.isinf(b_g).all()
-    pooled.meet_pool.give_back(tables)
-    again, fresh = pooled.plan(start, goal), HybridAStar(grid, ROBOT).plan(start, goal)
-    assert pooled.meet_pool.take()[0] is f_node  # the second plan met with the pooled tables
-    for result in (again, fresh):
-        assert result.expansions == first.expansions and np.array_equal(result.states, first.states)
-
-
 def test_a_problem_solved_before_the_join_starts_is_unchanged(monkeypatch):
     # bays#9 of the real-map bench (seed 0): the goal side finds it in a few thousand expansions
     grid = load_map("maps/real/bays.yaml")
@@ -130,18 +121,14 @@ def test_a_problem_solved_before_the_join_starts_is_unchanged(monkeypatch):
 
 def _turn(forward, back, clear, tried=()):
     """find_turn over a 20 m × 20 m map whose stored clearance is ``clear`` (a function of x, y on a 0.1 m grid)."""
-    nx = ny = 40
-    geo = (0.0, 0.0, CELL_M, nx, ny, YAW_BINS)
-    f_node, b_node = (np.full(nx * ny * YAW_BINS, -1, dtype=np.int64) for _ in range(2))
-    f_g, b_g = (np.full(nx * ny * YAW_BINS, np.inf) for _ in range(2))
-    index_nodes(forward[0], forward[1], 0, len(forward[0]), 0.0, -1, *geo, f_node, f_g)
-    index_nodes(back[0], back[1], 0, len(back[0]), math.pi, UPRIGHT, *geo, b_node, b_g)
+    f, b = _index(forward, 0.0, -1), _index(back, math.pi, UPRIGHT)
     xs = (np.arange(200) + 0.5) * 0.1
     grid = np.array([[clear(x, y) for x in xs] for y in xs])
-    done = np.zeros(nx * ny, dtype=np.bool_)
+    done = np.zeros(40 * 40, dtype=np.bool_)
     for cell in tried:
         done[cell] = True
-    return find_turn(f_node, b_node, forward[0], forward[1], UPRIGHT, YAW_BINS, grid, 0.0, 0.0, 0.1, done)
+    return find_turn(f.keys, f.nodes, b.keys, b.nodes, forward[0], forward[1], UPRIGHT, YAW_BINS, grid, 0.0, 0.0, 0.1,
+                     done)
 
 
 def test_a_turn_is_sought_where_the_trees_hold_opposite_headings_in_one_cell_the_roomiest_first():
@@ -157,6 +144,30 @@ def test_a_turn_is_sought_where_the_trees_hold_opposite_headings_in_one_cell_the
     i, j, cell = _turn(forward, back, lambda x, y: 1.0 if x > 10 else 0.5, tried=[cell])
     assert (i, j) == (0, 0)
     assert _turn(forward, back, lambda x, y: 1.0, tried=[10 * 40 + 24, 10 * 40 + 10]) == (-1, -1, -1)
+    # as much room in both: the least bucket index (the cell nearer the map's origin row by row), whatever the order
+    # of the hash map's slots
+    assert _turn(forward, back, lambda x, y: 1.0)[:2] == (0, 0)
+
+
+def test_a_trees_buckets_grow_and_keep_the_cheapest_node_of_each_bucket():
+    rng = np.random.default_rng(7)
+    rows = [(float(x), float(y), float(a), UPRIGHT, float(g))
+            for x, y, a, g in zip(rng.uniform(0, 20, 3000), rng.uniform(0, 20, 3000), rng.uniform(-4, 4, 3000),
+                                  rng.uniform(0, 50, 3000), strict=True)]
+    tree = _nodes(rows)
+    buckets = Buckets(4)  # 8 slots: grown (rehashed) many times on the way
+    for lo in range(0, 3000, 250):  # in rounds, as a search's new nodes are
+        buckets.room_for(250)
+        buckets.count += index_nodes(tree[0], tree[1], lo, lo + 250, 0.0, -1, *GEO, buckets.keys, buckets.nodes,
+                                     buckets.gs)
+    best: dict[int, int] = {}
+    for k, (x, y, a, _, g) in enumerate(rows):
+        b = (int(y // CELL_M) * 40 + int(x // CELL_M)) * YAW_BINS + int((a % (2 * math.pi)) / (2 * math.pi) * YAW_BINS)
+        if b not in best or g < rows[best[b]][4]:
+            best[b] = k
+    assert buckets.count == len(best) and 2 * buckets.count <= buckets.keys.size
+    assert all(buckets.node(b) == k for b, k in best.items())
+    assert buckets.node(40 * 40 * YAW_BINS + 5) == -1  # never filled
 
 
 def _turn_round_in_a_corridor():

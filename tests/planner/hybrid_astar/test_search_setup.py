@@ -1,5 +1,5 @@
 """A search's setup, reused between the searches of a planner: finished searches give their closed-set bitsets
-back cleared (closed_set.Pool), the goal-independent parameters are computed once; a search that reuses them
+back cleared (closed_set.BitsetPool), the goal-independent parameters are computed once; a search that reuses them
 decides as one that does not."""
 
 import math
@@ -67,7 +67,7 @@ def test_plans_with_reused_bitsets_are_the_plans_with_new_ones() -> None:
 
 
 def test_the_pool_keeps_at_most_its_share_and_a_wrong_size_is_not_used() -> None:
-    pool = closed_set.Pool(keep=2)
+    pool = closed_set.BitsetPool(keep=2)
     for _ in range(3):
         pool.give_back(np.zeros(8, np.uint8))
     assert len(pool) == 2
