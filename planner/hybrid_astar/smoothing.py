@@ -33,7 +33,9 @@ def curvature_table(motions: np.ndarray, rolls: Any, curvature: Callable[[np.nda
     called once on all of them), as two arrays."""
     held = np.asarray(motions, float).reshape(-1, 3)[:, 0]
     rolls = np.asarray(rolls, float).ravel()
-    keys = np.unique(np.concatenate((held, -held, [0.0], rolls, -rolls)))
+    # (+ 0.0 makes a −0.0 key 0.0: np.unique keeps whichever of the equal zeros its sort puts first; with numpy 2.4.6
+    # that was −0.0 on a zig-zag path, and the upright roll's curvature came out as −0.0)
+    keys = np.unique(np.concatenate((held, -held, [0.0], rolls, -rolls))) + 0.0
     return keys, np.asarray(curvature(keys), dtype=float).reshape(keys.shape)
 
 
