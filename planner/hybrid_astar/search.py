@@ -915,20 +915,24 @@ class HybridAStar:
         either side runs out of states below the bound, no forward path costs less. The goal side's expansions are
         appended to ``checked``. The start's side goes first: with the goal side first, the budget split evenly
         from the first expansion, 3 of the 15 forward paths found over seeds 0–7 of the real bench were lost."""
-        side = GoalSide(self, start, goal, o, _Search, reverse=False)
-        side.run.p[kernels.P_BOUND] = bound
+        # the goal side is set up (its own holonomic table, a wavefront) only when the start's side has not ended
+        # within its first turn: a forward path found or refuted in FORWARD_SLICE expansions needs none
+        side: GoalSide | None = None
         meet_every = self.chunk_expansions(o)
         next_meet = self.budget(MEET_AFTER)
         found = False
         try:
             while True:
-                left = total - run.expansions - side.expansions
-                if left <= 0 or clock.expired() or clock.cancelled():
+                spent = run.expansions + (side.expansions if side is not None else 0)
+                if total - spent <= 0 or clock.expired() or clock.cancelled():
                     break
-                status = run.step(min(FORWARD_SLICE, left))
+                status = run.step(min(FORWARD_SLICE, total - spent))
                 if status != kernels.RUNNING:
                     found = status == kernels.FOUND
                     break
+                if side is None:
+                    side = GoalSide(self, start, goal, o, _Search, reverse=False)
+                    side.run.p[kernels.P_BOUND] = bound
                 if side.step(min(FORWARD_SLICE, total - run.expansions - side.expansions)):
                     break
                 if run.expansions + side.expansions >= next_meet:
@@ -939,11 +943,12 @@ class HybridAStar:
             raise
         except PlanningError:  # out of time: no forward path, as when the budget runs out
             pass
+        side_expansions = side.expansions if side is not None else 0
         if checked is not None:
-            checked.append(side.expansions)
+            checked.append(side_expansions)
         if clock.cancelled():
-            raise PlannerCancelled("planning was cancelled", expansions=run.expansions + side.expansions)
-        if side.motions is not None:
+            raise PlannerCancelled("planning was cancelled", expansions=run.expansions + side_expansions)
+        if side is not None and side.motions is not None:
             return side.motions
         return self._motions(run) if found else None
 

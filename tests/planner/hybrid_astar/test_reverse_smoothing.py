@@ -260,6 +260,27 @@ def test_the_forward_search_ends_at_once_when_nothing_forwards_is_cheaper() -> N
     assert "forward_alternative" not in result.extra
 
 
+def test_a_forward_search_that_ends_in_its_first_turn_sets_up_no_goal_side(monkeypatch) -> None:
+    """The same problem: the forward search's start's side runs dry within its first FORWARD_SLICE expansions, so its
+    goal side (a holonomic wavefront of its own and a search) is never set up; nineteenth round of issue 21: 0.5–1.7
+    ms a plan on the 100 m field and the warehouse, where the forward path is found in tens of expansions."""
+    from planner.hybrid_astar import search
+
+    made: list[bool] = []
+
+    class Counted(search.GoalSide):
+        def __init__(self, *args, reverse=None, **kwargs):  # type: ignore[no-untyped-def]
+            made.append(reverse is False)
+            super().__init__(*args, reverse=reverse, **kwargs)
+
+    monkeypatch.setattr(search, "GoalSide", Counted)
+    grid = load_map("maps/real/smoothers_world.yaml")
+    start, goal = (11.225, 4.375, -2.0729579111761445), (9.825, 1.125, 1.6366855694506848)
+    result = HybridAStar(grid, ROBOT).plan(start, goal)
+    assert result.extra["forward_alternative_expansions"] < search.FORWARD_SLICE
+    assert result.extra["forward_check_expansions"] == 0 and not any(made)
+
+
 def test_a_forward_path_found_from_the_goal_replaces_one_rolling_backwards() -> None:
     """100by100_20#7 of the real-map bench's seed 1: the start faces away from the goal, 40 m off, and a round
     obstacle lies where the cheapest turn would go. The plan rolls 42 m backwards (cost 50.9 by the planner's own
