@@ -11,8 +11,8 @@ to the goal.
 
 Each tree's nodes are bucketed by (cell of :data:`CELL_M`, heading bin of 2π / :data:`YAW_BINS`), headings in the
 forward problem's frame (a goal-side node's turned by π); a bucket keeps its cheapest node (least g). A tree's
-buckets are a hash map (:class:`Buckets`: the closed set's open addressing, :mod:`closed_set`, with the node in a
-parallel array), sized by the tree, not the map: until issue 21's nineteenth round they were four arrays over the
+buckets are a hash map (:class:`Buckets`: the closed set's open addressing, :mod:`closed_set`, with the node and its
+g in parallel arrays), sized by the tree, not the map: until issue 21's nineteenth round they were four arrays over the
 whole map (1.4 M buckets each on a 100 m map, 46 MB a meeting), whose filling took 1.3 ms a meeting in a warm
 process and up to 7 ms an array where its pages were new (the real-map bench: 100by100_20#7 of seed 1, 107 ms,
 of which 10 in the search loop). After each
