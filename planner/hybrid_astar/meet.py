@@ -79,7 +79,7 @@ def index_nodes(node_f: np.ndarray, node_i: np.ndarray, lo: int, hi: int, turn: 
     """Put nodes [lo, hi) into the buckets (heading turned by ``turn``), each bucket keeping its least-g node (g as
     it was when the node was put in: ``gs``); ``upright_roll`` ≥ 0 keeps only nodes holding that roll index.
     ``keys`` / ``nodes`` / ``gs`` is the hash map (room for hi − lo more buckets at a load of at most one half:
-    :meth:`Buckets.room_for`). Returns the buckets added."""
+    :meth:`Buckets.add` makes it). Returns the buckets added."""
     added = 0
     for k in range(lo, hi):
         if upright_roll >= 0 and node_i[k, 1] != upright_roll:
@@ -199,7 +199,13 @@ class Buckets:
         self.gs = np.full(self.keys.size, np.inf)
         self.count = 0
 
-    def room_for(self, more: int) -> None:
+    def add(self, node_f: np.ndarray, node_i: np.ndarray, lo: int, hi: int, turn: float, upright_roll: int,
+            geo: tuple[float, float, float, int, int, int]) -> None:
+        """Put nodes [lo, hi) in (:func:`index_nodes`, ``geo`` its (ox, oy, cell, nx, ny, nyaw)), room made first."""
+        self._room_for(hi - lo)
+        self.count += index_nodes(node_f, node_i, lo, hi, turn, upright_roll, *geo, self.keys, self.nodes, self.gs)
+
+    def _room_for(self, more: int) -> None:
         """Make room for ``more`` buckets at a load of at most one half."""
         if 2 * (self.count + more) <= self.keys.size:
             return
@@ -221,9 +227,8 @@ def warm_up() -> None:
     node_f, node_i = np.zeros((1, 5)), np.zeros((1, 3), dtype=np.int64)
     tree = Buckets(1)
     geo = (0.0, 0.0, CELL_M, 1, 1, YAW_BINS)
-    index_nodes(node_f, node_i, 0, 1, math.pi, 0, *geo, tree.keys, tree.nodes, tree.gs)
-    tree.count = 1
-    tree.room_for(tree.keys.size)  # (rehash)
+    tree.add(node_f, node_i, 0, 1, math.pi, 0, geo)
+    tree.add(node_f, node_i, 0, 1, math.pi, 0, geo)  # (its table of 2 slots is then full: rehash compiled too)
     out_a, out_b, out_cost = np.zeros(1, dtype=np.int64), np.zeros(1, dtype=np.int64), np.zeros(1)
     find_pairs(node_f, node_i, 0, 1, 0.0, -1, node_f, math.pi, tree.keys, tree.nodes, *geo, 1.0, MAX_SHOT_M, out_a,
                out_b, out_cost)
@@ -273,9 +278,7 @@ class Meeting:
         b_hi = int(back.counters[kernels.C_NODES])
         for tree, run, done, hi, turn, upright in ((self.forward, forward, self.f_done, f_hi, 0.0, -1),
                                                    (self.back, back, self.b_done, b_hi, math.pi, self.upright)):
-            tree.room_for(hi - done)
-            tree.count += index_nodes(run.node_f, run.node_i, done, hi, turn, upright, *geo, tree.keys, tree.nodes,
-                                      tree.gs)
+            tree.add(run.node_f, run.node_i, done, hi, turn, upright, geo)
         rho = pl.robot.min_turning_radius_m
         # new forward nodes against the goal side's buckets, new goal-side nodes against the forward ones
         n = find_pairs(forward.node_f, forward.node_i, self.f_done, f_hi, 0.0, -1, back.node_f, math.pi,

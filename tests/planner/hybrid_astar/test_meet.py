@@ -10,7 +10,7 @@ import pytest
 
 from planner.errors import NoValidPathFound, PlannerCancelled
 from planner.hybrid_astar import search, two_ended
-from planner.hybrid_astar.meet import CELL_M, YAW_BINS, Buckets, find_pairs, find_turn, index_nodes
+from planner.hybrid_astar.meet import CELL_M, YAW_BINS, Buckets, find_pairs, find_turn
 from planner.hybrid_astar.search import HybridAStar, PlannerOptions
 from planner.maps.nav2 import load_map
 from planner.robot import load_robot
@@ -33,9 +33,7 @@ def _nodes(rows):
 def _index(tree, turn, upright):
     """The buckets of a tree (node_f, node_i) on a 20 m × 20 m map, headings turned by ``turn``."""
     buckets = Buckets(4)
-    buckets.room_for(len(tree[0]))
-    buckets.count += index_nodes(tree[0], tree[1], 0, len(tree[0]), turn, upright, *GEO, buckets.keys,
-                                 buckets.nodes, buckets.gs)
+    buckets.add(tree[0], tree[1], 0, len(tree[0]), turn, upright, GEO)
     return buckets
 
 
@@ -157,9 +155,7 @@ def test_a_trees_buckets_grow_and_keep_the_cheapest_node_of_each_bucket():
     tree = _nodes(rows)
     buckets = Buckets(4)  # 8 slots: grown (rehashed) many times on the way
     for lo in range(0, 3000, 250):  # in rounds, as a search's new nodes are
-        buckets.room_for(250)
-        buckets.count += index_nodes(tree[0], tree[1], lo, lo + 250, 0.0, -1, *GEO, buckets.keys, buckets.nodes,
-                                     buckets.gs)
+        buckets.add(tree[0], tree[1], lo, lo + 250, 0.0, -1, GEO)
     best: dict[int, int] = {}
     for k, (x, y, a, _, g) in enumerate(rows):
         b = (int(y // CELL_M) * 40 + int(x // CELL_M)) * YAW_BINS + int((a % (2 * math.pi)) / (2 * math.pi) * YAW_BINS)
