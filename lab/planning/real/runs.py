@@ -64,7 +64,8 @@ class RunRecord:
     median over the runs as ``time_s`` is.
     ``shift_m``: the sideways shift of the final path's roll changes, radius × the total roll change (eq. 1):
     sphereplan's as it rolls it; for BIT*'s car path what a sphere would pay to roll it
-    (:func:`rolled_shift_m`), which the car's length leaves out.
+    (:func:`rolled_shift_m`), which the car's length leaves out. ``first_shift_m``: the same of the first solution
+    (sphereplan's: its one path's).
     """
 
     map: str
@@ -94,6 +95,7 @@ class RunRecord:
     message: str
     search_loop_s: float = math.nan
     shift_m: float = math.nan
+    first_shift_m: float = math.nan
 
 
 CSV_COLUMNS = tuple(f.name for f in fields(RunRecord))
@@ -103,7 +105,7 @@ def _record(problem: RealProblem, planner: str, status: str, time_s: float, time
             valid: bool = False, first_length_m: float = math.nan, length_m: float = math.nan,
             min_clearance_m: float = math.nan, reported_clearance_m: float = math.nan, reverses: bool = False,
             expansions: int = -1, message: str = "", search_loop_s: float = math.nan,
-            shift_m: float = math.nan) -> RunRecord:
+            shift_m: float = math.nan, first_shift_m: float = math.nan) -> RunRecord:
     return RunRecord(
         map=problem.map_name, problem=problem.index, start_x=problem.start[0], start_y=problem.start[1],
         start_yaw=problem.start[2], goal_x=problem.goal[0], goal_y=problem.goal[1], goal_yaw=problem.goal[2],
@@ -112,6 +114,7 @@ def _record(problem: RealProblem, planner: str, status: str, time_s: float, time
         first_length_m=first_length_m, length_m=length_m, reference_length_m=math.nan, length_ratio=math.nan,
         min_clearance_m=min_clearance_m, reported_clearance_m=reported_clearance_m, valid=valid,
         reverses=reverses, expansions=expansions, message=message, search_loop_s=search_loop_s, shift_m=shift_m,
+        first_shift_m=first_shift_m,
     )
 
 
@@ -224,14 +227,14 @@ def run_sphereplan(problem: RealProblem, grid: OccupancyGrid, robot: RobotProfil
     hits = checker.collides_many(dense)
     valid = not bool(hits.any())
     message = "" if valid else f"the padded footprint meets an obstacle at {int(hits.sum())} of {len(dense)} poses"
+    shift = shift_of_rolls(result.states[:, 3], robot.radius_m)
     log.info("%s sphereplan solved in %.3f s, %.2f m%s", problem.name, elapsed, result.length_m,
              "" if valid else " (" + message + ")")
     return _record(problem, SPHEREPLAN, "solved", elapsed, time_limit_s, valid=valid,
                    first_length_m=result.length_m, length_m=result.length_m,
                    min_clearance_m=checker.min_clearance(dense), reported_clearance_m=result.min_clearance_m,
                    reverses=bool((result.states[:, 4] < 0).any()), expansions=int(result.expansions),
-                   message=message, search_loop_s=loop_s,
-                   shift_m=shift_of_rolls(result.states[:, 3], robot.radius_m))
+                   message=message, search_loop_s=loop_s, shift_m=shift, first_shift_m=shift)
 
 
 def run_reference(problem: RealProblem, grid: OccupancyGrid, robot: RobotProfile, checker: FootprintReferee,
@@ -276,23 +279,31 @@ def run_reference(problem: RealProblem, grid: OccupancyGrid, robot: RobotProfile
     first_length = float(setup.getSolutionPath().length())
     if on_first is not None:
         on_first(first, first_length)
+    # what a sphere would pay to roll the first solution (after its time was taken; OMPL's own path object is
+    # replaced by the optimisation below, so a copy is interpolated)
+    first_shift = rolled_shift_m(_dense_poses(og.PathGeometric(setup.getSolutionPath()), res), robot)
     bit.setStopOnSolnImprovement(False)
     budget = time_limit_s if optimise_s is None else optimise_s
     if budget - first > 0.05:
         setup.solve(budget - first)
     path = setup.getSolutionPath()
     length = float(path.length())
-    path.interpolate(max(2, math.ceil(length / (0.5 * res)) + 1))
-    poses = np.array([[path.getState(i).getX(), path.getState(i).getY(), path.getState(i).getYaw()]
-                      for i in range(path.getStateCount())])
-    dense = densify(poses, 0.5 * res)
+    dense = _dense_poses(path, res)
     hits = checker.collides_many(dense)
     ok = not bool(hits.any())
     log.info("%s %s: first %.3f s (%.2f m), final %.2f m", problem.name, planner, first, first_length, length)
     return _record(problem, planner, "solved", first, time_limit_s, valid=ok, first_length_m=first_length,
                    length_m=length, min_clearance_m=checker.min_clearance(dense), reverses=_reverses(dense),
                    message="" if ok else f"path meets an obstacle at {int(hits.sum())} interpolated poses",
-                   shift_m=rolled_shift_m(dense, robot))
+                   shift_m=rolled_shift_m(dense, robot), first_shift_m=first_shift)
+
+
+def _dense_poses(path: Any, res: float) -> np.ndarray:
+    """An OMPL geometric path's poses (x, y, yaw) at most half a cell apart (the path is interpolated in place)."""
+    path.interpolate(max(2, math.ceil(float(path.length()) / (0.5 * res)) + 1))
+    poses = np.array([[path.getState(i).getX(), path.getState(i).getY(), path.getState(i).getYaw()]
+                      for i in range(path.getStateCount())])
+    return densify(poses, 0.5 * res)
 
 
 def with_reference_lengths(records: Sequence[RunRecord], reverse_allowed: bool) -> list[RunRecord]:

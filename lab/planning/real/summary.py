@@ -47,7 +47,8 @@ class MapSummary:
     ``shift_share_median``: sphereplan's sideways shifts (the roll changes', eq. 1) ÷ its path's length, median;
     ``rolled_ratio_median``: length ÷ the reference's best as a sphere would roll it (its length plus the shifts
     of its turns, :func:`~lab.planning.real.runs.rolled_shift_m`; the shortest such among the allowed spaces),
-    median.
+    median; ``rolled_first_ratio_median`` and ``longer_than_rolled_first``: ``first_ratio_median`` and
+    ``longer_than_first`` with BIT*'s first solutions as a sphere would roll them (length plus ``first_shift_m``).
     """
 
     map: str
@@ -86,6 +87,8 @@ class MapSummary:
     reported_clearance_median_m: float
     shift_share_median: float = math.nan
     rolled_ratio_median: float = math.nan
+    rolled_first_ratio_median: float = math.nan
+    longer_than_rolled_first: float = math.nan
 
 
 def _median(values: Sequence[float]) -> float:
@@ -128,7 +131,7 @@ def _summary(name: str, records: list[RunRecord], checker: FootprintReferee | No
         pose = (r.start_x, r.start_y, r.start_yaw) if r.status == "start_refused" else (r.goal_x, r.goal_y, r.goal_yaw)
         if check is None or not check.collides(*pose):
             refused_free += 1
-    both_ours, both_bit, both_ratio, first_ratio, unsolved_times, rolled = [], [], [], [], [], []
+    both_ours, both_bit, both_ratio, first_ratio, unsolved_times, rolled, rolled_first = [], [], [], [], [], [], []
     missed = 0
     for g in by_problem.values():
         mine = g.get(SPHEREPLAN)
@@ -143,6 +146,9 @@ def _summary(name: str, records: list[RunRecord], checker: FootprintReferee | No
             rolled_refs = [r.length_m + r.shift_m for r in refs if math.isfinite(r.shift_m)]
             if rolled_refs:  # (a CSV written before the shifts were recorded has none)
                 rolled.append(mine.length_m / min(rolled_refs))
+            rolled_firsts = [r.first_length_m + r.first_shift_m for r in refs if math.isfinite(r.first_shift_m)]
+            if rolled_firsts:
+                rolled_first.append(mine.length_m / min(rolled_firsts))
         anyone = (mine is not None and mine.solved) or bool(ref_solved(g, set(REFERENCE_SPACES)))
         if not anyone and mine is not None and mine.status in ("timeout", "no_path", "error"):
             unsolved_times.append(mine.time_s)
@@ -167,8 +173,7 @@ def _summary(name: str, records: list[RunRecord], checker: FootprintReferee | No
         disconnected_time_max_s=max((r.time_s for r in ours if r.disconnected), default=math.nan),
         length_ratio_median=_median(ratios), length_ratio_max=max(ratios) if ratios else math.nan,
         first_ratio_median=_median(first_ratio),
-        longer_than_first=(sum(1 for v in first_ratio if v > 1.0 + 1e-9) / len(first_ratio)) if first_ratio
-        else math.nan,
+        longer_than_first=_share_longer(first_ratio),
         expansions_per_s=(sum(r.expansions for r in solved if r.expansions > 0)
                           / max(sum(r.time_s for r in solved if r.expansions > 0), 1e-9)) if solved else math.nan,
         loop_expansions_per_s=_loop_rate(solved),
@@ -178,7 +183,13 @@ def _summary(name: str, records: list[RunRecord], checker: FootprintReferee | No
         shift_share_median=_median([r.shift_m / r.length_m for r in solved
                                     if math.isfinite(r.shift_m) and r.length_m > 0]),
         rolled_ratio_median=_median(rolled),
+        rolled_first_ratio_median=_median(rolled_first), longer_than_rolled_first=_share_longer(rolled_first),
     )
+
+
+def _share_longer(ratios: Sequence[float]) -> float:
+    """The share of length ratios above 1 (NaN when there are none)."""
+    return sum(1 for v in ratios if v > 1.0 + 1e-9) / len(ratios) if ratios else math.nan
 
 
 TABLE_COLUMNS = (
@@ -209,6 +220,8 @@ TABLE_COLUMNS = (
     ("rep m", "sphereplan's reported min_clearance_m, median"),
     ("shift", "sphereplan's sideways shifts (roll changes) ÷ its length, median"),
     ("÷rolled", "length ÷ the reference's best plus the shifts a sphere pays to roll it, median"),
+    ("÷1st rolled", "length ÷ BIT*'s first solution plus the shifts a sphere pays to roll it, median"),
+    (">1st rolled", "share longer than BIT*'s first solution as a sphere would roll it"),
 )
 
 
@@ -240,7 +253,8 @@ def format_real_table(summaries: Sequence[MapSummary]) -> str:
             _fmt(s.first_ratio_median, 3), _fmt(s.longer_than_first, 2), _fmt(s.expansions_per_s, 0),
             _fmt(s.loop_expansions_per_s, 0), _fmt(s.expansions_per_m, 0),
             _fmt(s.clearance_median_m, 3), _fmt(s.reported_clearance_median_m, 3), _fmt(s.shift_share_median, 3),
-            _fmt(s.rolled_ratio_median, 3),
+            _fmt(s.rolled_ratio_median, 3), _fmt(s.rolled_first_ratio_median, 3),
+            _fmt(s.longer_than_rolled_first, 2),
         ])
     head = [c[0] for c in TABLE_COLUMNS]
     widths = [max(len(head[i]), *(len(r[i]) for r in rows)) for i in range(len(head))]
@@ -249,7 +263,8 @@ def format_real_table(summaries: Sequence[MapSummary]) -> str:
     for r in rows:
         out.append("  ".join(v.ljust(widths[i]) if i < 2 else v.rjust(widths[i]) for i, v in enumerate(r)))
     out.append("")
-    out.extend(f"  {short:9s} {long}" for short, long in TABLE_COLUMNS[2:])
+    pad = max(len(short) for short, _ in TABLE_COLUMNS)
+    out.extend(f"  {short:{pad}s} {long}" for short, long in TABLE_COLUMNS[2:])
     return "\n".join(out)
 
 

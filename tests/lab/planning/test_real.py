@@ -126,6 +126,7 @@ def test_reference_finds_the_straight_path_on_an_open_map() -> None:
         rec = run_reference(problem, grid, ROBOT, checker, planner, 0.5)
         assert rec.solved and rec.valid and rec.status == "solved"
         assert rec.length_m == pytest.approx(8.0, abs=1e-6)  # the straight line is the optimum
+        assert rec.shift_m == pytest.approx(0.0, abs=1e-9) and rec.first_shift_m >= 0.0
         assert rec.min_clearance_m == pytest.approx(1.0 - 0.37, abs=1e-6)  # 2 m corridor, padded half-width 0.37 m
         assert not rec.reverses
 
@@ -139,6 +140,13 @@ def test_reference_goes_around_a_block_and_a_sealed_goal_stays_unsolved() -> Non
     assert rec.solved and rec.valid
     assert 8.5 < rec.length_m < 16.0 and rec.length_m <= rec.first_length_m
     assert 0.0 < rec.min_clearance_m < 1.0
+    # a sphere rolling the way round the block pays the shifts of its turns
+    assert rec.shift_m > 0.0 and rec.first_shift_m > 0.0
+    # with no time to optimise, the final path is the first: its shift is the first solution's
+    once = run_reference(_problem(grid, (2.0, 3.0, 0.0), (10.0, 3.0, 0.0)), grid, ROBOT, checker, BIT_DUBINS, 1.5,
+                         optimise_s=0.0)
+    assert once.solved and once.length_m == once.first_length_m
+    assert once.first_shift_m == pytest.approx(once.shift_m, abs=1e-12)
 
     sealed = occ.copy()
     sealed[10:110, 200:204] = True  # a box around the goal at x = 10–12 m
@@ -211,6 +219,16 @@ def test_summary_counts_and_medians() -> None:
     for reverse in (False, True):
         (s,) = summarise(with_reference_lengths(records, reverse), checkers, reverse, {"m": 0.1}, {"m": "240×120"})
         assert s.shift_share_median == pytest.approx(0.04) and s.rolled_ratio_median == pytest.approx(11.0 / 10.8)
+        assert math.isnan(s.rolled_first_ratio_median) and math.isnan(s.longer_than_rolled_first)  # none recorded
+        assert s.longer_than_first == 1.0  # 11 m against first solutions of 10.5 m (and 10.0 m)
+    # BIT*'s first solutions as a sphere would roll them (their own shifts, not the final paths'): 10.5 + 0.6
+    # (Dubins) and 10.0 + 1.2 (Reeds–Shepp); sphereplan's 11 m is shorter than both, in the car's metric longer
+    first_shifts = {(0, SPHEREPLAN): 0.44, (0, BIT_DUBINS): 0.6, (0, BIT_REEDS_SHEPP): 1.2}
+    records = [replace(r, first_shift_m=first_shifts.get((r.problem, r.planner), math.nan)) for r in records]
+    for reverse in (False, True):
+        (s,) = summarise(with_reference_lengths(records, reverse), checkers, reverse, {"m": 0.1}, {"m": "240×120"})
+        assert s.rolled_first_ratio_median == pytest.approx(11.0 / 11.1) and s.longer_than_rolled_first == 0.0
+        assert s.longer_than_first == 1.0 and s.rolled_ratio_median == pytest.approx(11.0 / 10.8)
 
 
 def test_real_figure_marks_unsolvable_and_explains_the_dashed_line() -> None:
