@@ -331,6 +331,30 @@ def test_exact_footprint_distance_of_any_winding_agrees_with_brute_force(poly: n
         assert d == pytest.approx(footprint_distance(grid, shape, pose[None], reach_m=1.0), abs=1e-9)
 
 
+_OFF_CENTRE = np.array([[0.2, -0.15], [0.6, -0.15], [0.6, 0.15], [0.2, 0.15]])  # the pose 0.2 m outside it
+
+
+@pytest.mark.parametrize("reach", [0.05, 0.1, 0.3, 1.0, 2.0])
+@pytest.mark.parametrize("poly", [_OFF_CENTRE, _L_SHAPE, _box_robot(0.3, 0.2, 0.02).footprint_polygon],
+                         ids=["off centre", "L", "box"])
+def test_exact_footprint_distance_within_any_reach_agrees_with_brute_force(poly: np.ndarray, reach: float) -> None:
+    """The distance's pruning (cells beyond the best so far, by the polygon's box and by the pose's distance less the
+    polygon's reach) holds for every reach and for a pose outside its own polygon: the brute force's distance, next to
+    walls, a thin post and lone cells, far and near."""
+    rng = np.random.default_rng(21)
+    occ = rng.random((100, 100)) < 0.003
+    occ[40:45, 30:70] = True
+    occ[60:90, 62:64] = True
+    grid = OccupancyGrid.from_occupied(occ, 0.05)
+    clear = ClearanceMap(grid)
+    shape = types.SimpleNamespace(footprint_polygon=np.asarray(poly, float))
+    poses = np.column_stack([rng.uniform(0.3, 4.7, 200), rng.uniform(0.3, 4.7, 200), rng.uniform(-3.2, 3.2, 200)])
+    fast = clear.footprint_distances(poly, poses, reach_m=reach)
+    assert np.sum((fast > 0.0) & (fast < reach)) >= 3  # (distances measured, not only overlaps and caps)
+    for pose, d in zip(poses, fast, strict=True):
+        assert d == pytest.approx(footprint_distance(grid, shape, pose[None], reach_m=reach), abs=1e-9)
+
+
 def _turning_path(x0: float, y0: float, yaw0: float, n: int, step: float, curvature: float) -> np.ndarray:
     """Poses ``step`` apart along an arc (rows x, y, yaw), the last ones turning on the spot."""
     poses = np.empty((n, 3))
