@@ -374,11 +374,11 @@ def _least_distance(blocked: np.ndarray, ox: float, oy: float, res: float, poses
     measured pose after pose, each a little nearer than the best so far. depot#9 of the real bench's seed 2, a 4.7 m
     path 1.5 m from everything: 64 measures, 0.72 ms of a 1.3 ms plan; in order of their margins, 10 and 0.10 ms.)"""
     turn = convex_turn(px, py)
-    best = _least_in_order(blocked, ox, oy, res, poses, lower_m, order, px, py, reach_m, turn, reach_m)
+    best = _least_in_order(blocked, ox, oy, res, poses, lower_m[order], order, px, py, reach_m, turn, reach_m)
     if best <= 0.0 or rest.size == 0:
         return best
-    margin = lower_m.copy()
-    below = np.empty(rest.size, dtype=np.int64)
+    below = np.empty(rest.size, dtype=np.int64)  # the rest below the best, and their margins
+    margin = np.empty(rest.size)
     n = 0
     for k in rest:
         if lower_m[k] >= best:
@@ -386,45 +386,39 @@ def _least_distance(blocked: np.ndarray, ox: float, oy: float, res: float, poses
         m = footprint_margin(clear, blocked, ox, oy, res, poses[k, 0], poses[k, 1], poses[k, 2], offx, offy, r_c,
                              px, py, turn)
         if m < best:  # (the margin bounds the distance, as the derived bound did)
-            margin[k] = max(lower_m[k], m)
             below[n] = k
+            margin[n] = max(lower_m[k], m)
             n += 1
-    if n == 0:
-        return best
-    below = below[:n]
-    return _least_in_order(blocked, ox, oy, res, poses, margin, below[np.argsort(margin[below], kind="mergesort")],
-                           px, py, best, turn, reach_m)
+    by_margin = np.argsort(margin[:n], kind="mergesort")
+    return _least_in_order(blocked, ox, oy, res, poses, margin[:n][by_margin], below[:n][by_margin], px, py, best,
+                           turn, reach_m)
 
 
 @njit(cache=True)
-def _least_in_order(blocked: np.ndarray, ox: float, oy: float, res: float, poses: np.ndarray, bound: np.ndarray,
+def _least_in_order(blocked: np.ndarray, ox: float, oy: float, res: float, poses: np.ndarray, bounds: np.ndarray,
                     order: np.ndarray, px: np.ndarray, py: np.ndarray, best: float, turn: int, reach_m: float) -> float:
-    """The least of ``best`` and the distances of the poses ``order``, measured in that order (of ``bound``, each a
-    lower bound of its pose's distance) until no bound is below the best; the first within its bound + LEAST_SEED_M
-    first when nothing nearer than the reach is known yet."""
+    """The least of ``best`` and the distances of the poses ``order``, measured in that order until no bound is below
+    the best (``bounds[i]``: a lower bound of pose ``order[i]``'s distance, ascending); the first within its bound +
+    LEAST_SEED_M first when nothing nearer than the reach is known yet."""
     if order.size and best >= reach_m:
         k = order[0]
-        near = max(bound[k], 0.0) + LEAST_SEED_M
+        near = max(bounds[0], 0.0) + LEAST_SEED_M
         if near < reach_m:
             d = footprint_distance(blocked, ox, oy, res, poses[k, 0], poses[k, 1], poses[k, 2], px, py, near, turn)
             if d < near:
                 best = d
-    for k in order:
-        if bound[k] >= best:
+    for i in range(order.size):
+        if bounds[i] >= best:
             break
-        best = min(best, _measure(blocked, ox, oy, res, poses, bound, k, px, py, best, turn))
+        k = order[i]
+        if bounds[i] > 0.0:  # (no overlap test where the bound proves the pose free)
+            d = _free_distance(blocked, ox, oy, res, poses[k, 0], poses[k, 1], poses[k, 2], px, py, best, turn)
+        else:
+            d = footprint_distance(blocked, ox, oy, res, poses[k, 0], poses[k, 1], poses[k, 2], px, py, best, turn)
+        best = min(best, d)
         if best <= 0.0:
             return best
     return best
-
-
-@njit(cache=True)
-def _measure(blocked: np.ndarray, ox: float, oy: float, res: float, poses: np.ndarray, lower_m: np.ndarray, k: int,
-             px: np.ndarray, py: np.ndarray, best: float, turn: int) -> float:
-    """Pose ``k``'s footprint distance within ``best`` (no overlap test where its bound is above 0)."""
-    if lower_m[k] > 0.0:
-        return _free_distance(blocked, ox, oy, res, poses[k, 0], poses[k, 1], poses[k, 2], px, py, best, turn)
-    return footprint_distance(blocked, ox, oy, res, poses[k, 0], poses[k, 1], poses[k, 2], px, py, best, turn)
 
 
 def _polygon_samples(poly: np.ndarray, spacing_m: float) -> np.ndarray:
