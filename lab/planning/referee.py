@@ -20,7 +20,7 @@ centre than the polygon's circumradius plus half a cell diagonal; the kernels ar
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from numba import njit
@@ -309,3 +309,36 @@ class FootprintReferee:
         if len(poses) == 0:
             return math.nan
         return float(self.clearances(poses, reach_m).min())
+
+    def grown(self, pad_m: float) -> FootprintReferee:
+        """The referee for the polygon grown by ``pad_m`` (:func:`grown_polygon`): a pose it calls free keeps the
+        original polygon at least ``pad_m`` − :data:`GROWTH_ERROR` × ``pad_m`` from every blocked square and from the
+        map's edge (the room a planner is asked to keep, as the benchmark's room-matched reference does)."""
+        return replace(self, polygon=grown_polygon(self.polygon, pad_m))
+
+
+GROWTH_SAMPLES = 64  # points on the disc a grown polygon's corners are rounded with
+GROWTH_ERROR = 1.0 - math.cos(math.pi / GROWTH_SAMPLES)  # how far inside the exact grown shape its chords lie, × pad
+
+
+def grown_polygon(polygon: np.ndarray, pad_m: float) -> np.ndarray:
+    """A convex polygon grown by ``pad_m`` (its Minkowski sum with a disc of that radius): the convex hull of its
+    vertices each moved by ``pad_m`` in :data:`GROWTH_SAMPLES` directions, counter-clockwise. Its edges lie inside
+    the exact grown shape by at most ``pad_m`` × :data:`GROWTH_ERROR` (0.12 % of the pad), so a pose it finds free
+    keeps the original polygon that far from every obstacle, up to that. A polygon that is not convex is refused
+    (ValueError): the hull of a grown non-convex polygon would fill its notches."""
+    from scipy.spatial import ConvexHull
+
+    from planner.maps.clearance import convex_turn
+
+    poly = np.ascontiguousarray(np.asarray(polygon, dtype=np.float64).reshape(-1, 2))
+    if not math.isfinite(pad_m) or pad_m < 0:
+        raise ValueError(f"the pad must be a finite number ≥ 0, not {pad_m!r}")
+    if convex_turn(np.ascontiguousarray(poly[:, 0]), np.ascontiguousarray(poly[:, 1])) == 0:
+        raise ValueError("only a convex footprint can be grown by a pad (this one is not convex)")
+    if pad_m == 0:
+        return poly.copy()
+    angles = np.linspace(0.0, 2.0 * math.pi, GROWTH_SAMPLES, endpoint=False)
+    ring = pad_m * np.stack([np.cos(angles), np.sin(angles)], axis=1)
+    points = (poly[:, None, :] + ring[None, :, :]).reshape(-1, 2)
+    return np.ascontiguousarray(points[ConvexHull(points).vertices])

@@ -64,6 +64,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                            "optimising until this much in all; its final path is the reference's best (default 3; "
                            "0 = optimise until the time limit)")
     real.add_argument("--no-reference", action="store_true", help="skip OMPL BIT* (no solvability reference)")
+    real.add_argument("--room-reference", action="store_true",
+                      help="also time BIT* asked to keep the room sphereplan's path keeps (its footprint grown by "
+                           "that clearance, up to the robot's preferred_clearance_m) to its first solution, on every "
+                           "problem sphereplan solved: the table's 'x room' columns (a convex footprint only)")
     real.add_argument("--repeat", type=int, default=1,
                       help="time each solved problem this many times, sphereplan and BIT*'s first solution alike, "
                            "and keep the median (default 1; 3 steadies the per-problem time ratios)")
@@ -106,7 +110,16 @@ def run_real(args: argparse.Namespace) -> int:
     reference_s = DEFAULT_REFERENCE_S if args.reference_time is None else args.reference_time
     if reference_s < 0:
         raise InvalidInput("--reference-time", "must be ≥ 0 (0 = until the time limit)")
+    if args.room_reference and args.no_reference:
+        raise InvalidInput("--room-reference", "needs the reference: leave out --no-reference")
     robot = load_robot(args.robot)
+    if args.room_reference:
+        from lab.planning.referee import grown_polygon
+
+        try:
+            grown_polygon(robot.footprint_polygon, 0.0)
+        except ValueError as exc:
+            raise InvalidInput("--room-reference", f"robot {robot.name!r}: {exc}") from None
     options = _options(args.options)
     given = args.real_maps if args.real_maps is not None else ",".join(real_map_names())
     specs = [m.strip() for m in given.split(",") if m.strip()]
@@ -115,7 +128,7 @@ def run_real(args: argparse.Namespace) -> int:
     paths = [resolve_map(m) for m in specs]
     from tqdm import tqdm
 
-    per_problem = 1 if args.no_reference else 3
+    per_problem = 1 if args.no_reference else 4 if args.room_reference else 3
     with tqdm(total=len(paths) * args.per_map * per_problem, file=sys.stderr, desc="bench real",
               disable=quiet() or not sys.stderr.isatty()) as bar:
 
@@ -126,10 +139,10 @@ def run_real(args: argparse.Namespace) -> int:
         result = run_real_bench(paths, robot, args.per_map, args.seed, time_limit_s=args.time_limit,
                                 options=options, reference=not args.no_reference,
                                 reference_s=reference_s or None,
-                                progress=progress, repeat=args.repeat)
+                                progress=progress, repeat=args.repeat, room_reference=args.room_reference)
     limit = "default limits (10 s ≥ 1 M cells, else 5 s)" if args.time_limit is None else f"{args.time_limit:g} s"
     ref = ("no BIT*" if args.no_reference else f"BIT* {reference_s:g} s per space" if reference_s
-           else "BIT* optimising until the limit")
+           else "BIT* optimising until the limit") + (", BIT* keeping sphereplan's room" if args.room_reference else "")
     title = (f"sphereplan bench --suite real: {robot.name}, {len(paths)} maps × {args.per_map} problems, seed "
              f"{args.seed}, {limit}, {ref}, {'reversing' if result.reverse_allowed else 'forward-only'} sphereplan"
              + (f", times the median of {args.repeat} runs" if args.repeat > 1 else ""))

@@ -17,11 +17,13 @@ from lab.planning.real.runs import (
     BIT_REEDS_SHEPP,
     RunRecord,
     allows_reverse,
+    room_asked_m,
+    room_space,
     run_sphereplan,
     with_reference_lengths,
 )
 from lab.planning.real.summary import MapSummary, summarise
-from lab.planning.referee import FootprintReferee
+from lab.planning.referee import FootprintReferee, grown_polygon
 from planner.errors import (
     PlanningError,
 )
@@ -67,7 +69,7 @@ def run_real_bench(
     maps: Sequence[str | Path], robot: RobotProfile, per_map: int, seed: int, *,
     time_limit_s: float | None = None, options: PlannerOptions | None = None, reference: bool = True,
     reference_s: float | None = DEFAULT_REFERENCE_S, settings: DrawSettings | None = None,
-    progress: Callable[[str], None] | None = None, repeat: int = 1,
+    progress: Callable[[str], None] | None = None, repeat: int = 1, room_reference: bool = False,
 ) -> RealBenchResult:
     """Draw ``per_map`` problems on each map (one ``numpy.random.default_rng(seed)`` for the whole run, maps
     in the given order) and run sphereplan and, with ``reference``, BIT* on Dubins and Reeds–Shepp.
@@ -82,9 +84,19 @@ def run_real_bench(
     the first towards its goal), and BIT*'s first solution (the extra runs stop at it; OMPL's random numbers
     go on, so each run samples afresh). The lengths are the first run's. Single runs of a few milliseconds vary
     by a third from one run of the bench to the next; the per-problem time ratios inherit that.
+
+    ``room_reference`` (with ``reference``) also runs, on every problem sphereplan solved, BIT* on sphereplan's space
+    with the footprint grown by the room sphereplan's path keeps (:func:`~lab.planning.real.runs.room_asked_m`; a
+    convex footprint only), to its first solution (timed as the others, ``repeat`` times): how long a sampling
+    planner takes to a first path as roomy. Its rows' ``reported_clearance_m`` is that room and ``min_clearance_m``
+    its path's true clearance (the grown polygon's plus the room).
     """
     if repeat < 1:
         raise ValueError(f"repeat must be at least 1, not {repeat}")
+    if room_reference and not reference:
+        raise ValueError("the room-matched reference runs with the reference (reference=True)")
+    if room_reference:
+        grown_polygon(robot.footprint_polygon, 0.0)  # a footprint that cannot be grown is refused before any run
     from planner.maps.nav2 import load_map
 
     opts = options or PlannerOptions()
@@ -114,27 +126,44 @@ def run_real_bench(
                      setup[name], limit)
             optimise = None if reference_s is None else max(reference_s, 0.0)
             for problem in problems:
-                records.append(run_sphereplan(problem, grid, robot, checker, opts, limit, repeat))
+                mine = run_sphereplan(problem, grid, robot, checker, opts, limit, repeat)
+                records.append(mine)
                 if progress:
                     progress(f"{problem.name} sphereplan")
                 if worker is not None:
                     for planner in (BIT_DUBINS, BIT_REEDS_SHEPP):
-                        record = worker.run(problem, grid, robot, checker, planner, limit, optimise,
-                                            map_key=str(path))
-                        if record.status == "solved" and repeat > 1:
-                            times = [record.time_s] + [
-                                worker.run(problem, grid, robot, checker, planner, limit, 0.0,
-                                           map_key=str(path)).time_s for _ in range(repeat - 1)]
-                            record = replace(record, time_s=float(np.median(times)))
-                        records.append(record)
+                        records.append(_timed_reference(worker, problem, grid, robot, checker, planner, limit,
+                                                        optimise, str(path), repeat))
                         if progress:
                             progress(f"{problem.name} {planner}")
+                if worker is not None and room_reference and mine.solved:
+                    room = room_asked_m(mine, robot)
+                    record = _timed_reference(worker, problem, grid, robot, checker, room_space(reverse_allowed),
+                                              limit, 0.0, str(path), repeat, room)
+                    if record.solved:  # the grown polygon's clearance is the true one less the room
+                        record = replace(record, min_clearance_m=record.min_clearance_m + room)
+                    records.append(replace(record, reported_clearance_m=room))
+                    if progress:
+                        progress(f"{problem.name} {record.planner}")
     finally:
         if worker is not None:
             worker.close()
     final = with_reference_lengths(records, reverse_allowed)
     summaries = summarise(final, checkers, reverse_allowed, setup, cells)
     return RealBenchResult(tuple(final), tuple(summaries), tuple(drawn), robot.name, seed, reverse_allowed)
+
+
+def _timed_reference(worker: ReferenceWorker, problem: RealProblem, grid: OccupancyGrid, robot: RobotProfile,
+                     checker: FootprintReferee, planner: str, limit: float, optimise: float | None, map_key: str,
+                     repeat: int, room_m: float = 0.0) -> RunRecord:
+    """One BIT* run in the worker (its polygon grown by ``room_m``); when it solved and ``repeat`` > 1, its first
+    solution timed that many times in all (the extra runs stop at it) and the median kept."""
+    record = worker.run(problem, grid, robot, checker, planner, limit, optimise, map_key=map_key, room_m=room_m)
+    if record.status == "solved" and repeat > 1:
+        times = [record.time_s] + [worker.run(problem, grid, robot, checker, planner, limit, 0.0, map_key=map_key,
+                                              room_m=room_m).time_s for _ in range(repeat - 1)]
+        record = replace(record, time_s=float(np.median(times)))
+    return record
 
 
 def prepare_planner(grid: OccupancyGrid, robot: RobotProfile, options: PlannerOptions) -> float:

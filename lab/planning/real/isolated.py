@@ -38,8 +38,9 @@ Runner = Callable[..., RunRecord]
 
 
 def _worker_main(conn: Connection, ompl_seed: int, runner: Runner) -> None:
-    """The child's loop: receive (map key, (grid, checker) or None, problem, robot, planner, limit, optimise)
-    tuples, answer ``("first", (t, length))`` then ``("done", record)`` or ``("error", text)``; None stops."""
+    """The child's loop: receive (map key, (grid, checker) or None, problem, robot, planner, limit, optimise, room)
+    tuples (``room`` > 0: the checker grown by that much, :meth:`FootprintReferee.grown`), answer
+    ``("first", (t, length))`` then ``("done", record)`` or ``("error", text)``; None stops."""
     try:
         from ompl import util as ou
 
@@ -53,10 +54,12 @@ def _worker_main(conn: Connection, ompl_seed: int, runner: Runner) -> None:
         msg = conn.recv()
         if msg is None:
             return
-        key, payload, problem, robot, planner, limit, optimise = msg
+        key, payload, problem, robot, planner, limit, optimise, room = msg
         if payload is not None:
             maps[key] = payload
         grid, checker = maps[key]
+        if room > 0:
+            checker = checker.grown(room)
 
         def on_first(t: float, length: float) -> None:
             conn.send(("first", (t, length)))
@@ -143,11 +146,12 @@ class ReferenceWorker:
         self._stop(kill=True)
 
     def run(self, problem: RealProblem, grid: OccupancyGrid, robot: RobotProfile, checker: FootprintReferee,
-            planner: str, time_limit_s: float, optimise_s: float | None = None, map_key: str | None = None
-            ) -> RunRecord:
+            planner: str, time_limit_s: float, optimise_s: float | None = None, map_key: str | None = None,
+            room_m: float = 0.0) -> RunRecord:
         """One reference run in the worker; a crash, a hang or an exception becomes a record, never a raise.
 
-        ``map_key`` names the map (default ``grid.name``): a worker is sent each map once."""
+        ``map_key`` names the map (default ``grid.name``): a worker is sent each map once. ``room_m`` > 0 grows the
+        checker's polygon by that much in the worker (:meth:`FootprintReferee.grown`, the room-matched reference)."""
         key = map_key or grid.name
         if self._proc is None or not self._proc.is_alive():
             if self._proc is not None:
@@ -157,7 +161,7 @@ class ReferenceWorker:
         conn = self._conn
         payload = None if key in self._sent else (grid, checker)
         try:
-            conn.send((key, payload, problem, robot, planner, time_limit_s, optimise_s))
+            conn.send((key, payload, problem, robot, planner, time_limit_s, optimise_s, room_m))
         except (BrokenPipeError, OSError):
             return self._crashed(problem, planner, time_limit_s, None)
         self._sent.add(key)

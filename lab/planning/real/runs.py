@@ -40,7 +40,16 @@ SPHEREPLAN = "sphereplan"
 BIT_DUBINS = "bitstar-dubins"
 BIT_REEDS_SHEPP = "bitstar-reeds-shepp"
 REFERENCE_SPACES = {BIT_DUBINS: "dubins", BIT_REEDS_SHEPP: "reeds-shepp"}
-SHORT_NAMES = {SPHEREPLAN: "sp", BIT_DUBINS: "D", BIT_REEDS_SHEPP: "RS"}
+# The room-matched reference (``bench --suite real --room-reference``): BIT* on sphereplan's space (Reeds–Shepp when it
+# may reverse, else Dubins) with the footprint grown by the room sphereplan's path keeps (:func:`room_asked_m`), to its
+# first solution. It is no solvability or length reference: only its time is compared (summary.py, ``x room``).
+BIT_ROOM_DUBINS = "bitstar-room-dubins"
+BIT_ROOM_REEDS_SHEPP = "bitstar-room-reeds-shepp"
+ROOM_SPACES = {BIT_ROOM_DUBINS: "dubins", BIT_ROOM_REEDS_SHEPP: "reeds-shepp"}
+SHORT_NAMES = {SPHEREPLAN: "sp", BIT_DUBINS: "D", BIT_REEDS_SHEPP: "RS", BIT_ROOM_DUBINS: "roomD",
+               BIT_ROOM_REEDS_SHEPP: "roomRS"}
+ROOM_SLACK_M = 0.005  # the room-matched reference keeps this much less than sphereplan's path (its grown polygon's
+# chords and the densified check's spacing stay within it)
 
 
 # ------------------------------------------------------------------------------------------------- running
@@ -174,6 +183,19 @@ def _reverses(poses: np.ndarray) -> bool:
     return bool((along < -1e-3).any())
 
 
+def room_asked_m(sphereplan: RunRecord, robot: RobotProfile) -> float:
+    """The room the room-matched reference must keep on a problem sphereplan solved: what its path keeps (its true
+    clearance), at most the robot's ``preferred_clearance_m`` (the room sphereplan asks for), less ROOM_SLACK_M;
+    0 when that is negative or unknown."""
+    keep = min(robot.preferred_clearance_m, sphereplan.min_clearance_m) - ROOM_SLACK_M
+    return keep if math.isfinite(keep) and keep > 0 else 0.0
+
+
+def room_space(reverse_allowed: bool) -> str:
+    """The room-matched reference's planner name for sphereplan's motions."""
+    return BIT_ROOM_REEDS_SHEPP if reverse_allowed else BIT_ROOM_DUBINS
+
+
 def allows_reverse(options: PlannerOptions, robot: RobotProfile) -> bool:
     """Whether sphereplan may reverse with these options (``allow_reverse``; None means the profile's
     ``reversible``)."""
@@ -240,11 +262,12 @@ def run_sphereplan(problem: RealProblem, grid: OccupancyGrid, robot: RobotProfil
 def run_reference(problem: RealProblem, grid: OccupancyGrid, robot: RobotProfile, checker: FootprintReferee,
                   planner: str, time_limit_s: float, optimise_s: float | None = None,
                   on_first: Callable[[float, float], None] | None = None) -> RunRecord:
-    """OMPL BIT* (``planner`` = :data:`BIT_DUBINS` or :data:`BIT_REEDS_SHEPP`) at the robot's minimum turning
-    radius with the exact polygon validity check: time to the first solution (at most ``time_limit_s``), then
-    optimising until ``optimise_s`` in all (default ``time_limit_s``); motions are checked every half cell of
-    arc length. ``on_first(time_s, length_m)`` is called as soon as the first solution is known (a parent
-    process learns it even if OMPL then crashes while optimising)."""
+    """OMPL BIT* (``planner`` = :data:`BIT_DUBINS` or :data:`BIT_REEDS_SHEPP`, or a room-matched one of
+    :data:`ROOM_SPACES` with ``checker`` grown by the room: :meth:`FootprintReferee.grown`) at the robot's minimum
+    turning radius with the exact polygon validity check of ``checker``: time to the first solution (at most
+    ``time_limit_s``), then optimising until ``optimise_s`` in all (default ``time_limit_s``); motions are checked
+    every half cell of arc length. ``on_first(time_s, length_m)`` is called as soon as the first solution is known
+    (a parent process learns it even if OMPL then crashes while optimising)."""
     from ompl import base as ob
     from ompl import geometric as og
     from ompl import util as ou
@@ -253,7 +276,8 @@ def run_reference(problem: RealProblem, grid: OccupancyGrid, robot: RobotProfile
 
     ou.setLogLevel(ou.LOG_ERROR)
     rho = robot.min_turning_radius_m
-    space = bounded_to(ob.DubinsStateSpace(rho) if planner == BIT_DUBINS else ob.ReedsSheppStateSpace(rho), grid)
+    dubins = planner in (BIT_DUBINS, BIT_ROOM_DUBINS)
+    space = bounded_to(ob.DubinsStateSpace(rho) if dubins else ob.ReedsSheppStateSpace(rho), grid)
     setup = og.SimpleSetup(space)
     poly, blocked = checker.polygon, checker.blocked
     ox, oy, res, reach = checker.origin_xy[0], checker.origin_xy[1], checker.resolution_m, checker.circumradius_m

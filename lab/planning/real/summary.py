@@ -13,7 +13,15 @@ from typing import Any
 
 import numpy as np
 
-from lab.planning.real.runs import BIT_DUBINS, BIT_REEDS_SHEPP, CSV_COLUMNS, REFERENCE_SPACES, SPHEREPLAN, RunRecord
+from lab.planning.real.runs import (
+    BIT_DUBINS,
+    BIT_REEDS_SHEPP,
+    CSV_COLUMNS,
+    REFERENCE_SPACES,
+    ROOM_SPACES,
+    SPHEREPLAN,
+    RunRecord,
+)
 from lab.planning.referee import FootprintReferee
 
 log = logging.getLogger(__name__)
@@ -48,7 +56,11 @@ class MapSummary:
     ``rolled_ratio_median``: length ÷ the reference's best as a sphere would roll it (its length plus the shifts
     of its turns, :func:`~lab.planning.real.runs.rolled_shift_m`; the shortest such among the allowed spaces),
     median; ``rolled_first_ratio_median`` and ``longer_than_rolled_first``: ``first_ratio_median`` and
-    ``longer_than_first`` with BIT*'s first solutions as a sphere would roll them (length plus ``first_shift_m``).
+    ``longer_than_first`` with BIT*'s first solutions as a sphere would roll them (length plus ``first_shift_m``);
+    ``room_runs``, ``room_solved``: runs and solutions of the room-matched reference (``--room-reference``: BIT* with
+    the footprint grown by the room sphereplan's path keeps, on the problems sphereplan solved; not a solvability or
+    length reference, and not counted in ``bit_*`` or ``missed``), ``room_ratio_*``: sphereplan's time ÷ its
+    first-solution time, per problem where it solved, median and p90.
     """
 
     map: str
@@ -89,6 +101,10 @@ class MapSummary:
     rolled_ratio_median: float = math.nan
     rolled_first_ratio_median: float = math.nan
     longer_than_rolled_first: float = math.nan
+    room_runs: int = 0
+    room_solved: int = 0
+    room_ratio_median: float = math.nan
+    room_ratio_p90: float = math.nan
 
 
 def _median(values: Sequence[float]) -> float:
@@ -152,6 +168,9 @@ def _summary(name: str, records: list[RunRecord], checker: FootprintReferee | No
         anyone = (mine is not None and mine.solved) or bool(ref_solved(g, set(REFERENCE_SPACES)))
         if not anyone and mine is not None and mine.status in ("timeout", "no_path", "error"):
             unsolved_times.append(mine.time_s)
+    room_runs = [g[p] for g in by_problem.values() for p in ROOM_SPACES if p in g]
+    room_ratio = [g[SPHEREPLAN].time_s / max(g[p].time_s, 1e-6) for g in by_problem.values() for p in ROOM_SPACES
+                  if p in g and g[p].solved and SPHEREPLAN in g and g[SPHEREPLAN].solved]
     ratios = [r.length_ratio for r in solved if math.isfinite(r.length_ratio)]
     limits = sorted({r.time_limit_s for r in records})
     return MapSummary(
@@ -161,7 +180,8 @@ def _summary(name: str, records: list[RunRecord], checker: FootprintReferee | No
         bit_dubins=sum(1 for g in by_problem.values() if BIT_DUBINS in g and g[BIT_DUBINS].solved),
         bit_reeds_shepp=sum(1 for g in by_problem.values() if BIT_REEDS_SHEPP in g and g[BIT_REEDS_SHEPP].solved),
         bit_solved=sum(1 for g in by_problem.values() if ref_solved(g, set(REFERENCE_SPACES))),
-        ref_failed=sum(1 for r in records if r.planner in REFERENCE_SPACES and r.status in ("crashed", "error")),
+        ref_failed=sum(1 for r in records if (r.planner in REFERENCE_SPACES or r.planner in ROOM_SPACES)
+                       and r.status in ("crashed", "error")),
         sphereplan=len(solved), missed=missed, refused_free=refused_free,
         timeouts=sum(1 for r in ours if r.status == "timeout"),
         bad_paths=sum(1 for r in ours if r.status == "solved" and not r.valid),
@@ -184,6 +204,8 @@ def _summary(name: str, records: list[RunRecord], checker: FootprintReferee | No
                                     if math.isfinite(r.shift_m) and r.length_m > 0]),
         rolled_ratio_median=_median(rolled),
         rolled_first_ratio_median=_median(rolled_first), longer_than_rolled_first=_share_longer(rolled_first),
+        room_runs=len(room_runs), room_solved=sum(1 for r in room_runs if r.solved),
+        room_ratio_median=_median(room_ratio), room_ratio_p90=_p90(room_ratio),
     )
 
 
@@ -223,6 +245,13 @@ TABLE_COLUMNS = (
     ("÷1st rolled", "length ÷ BIT*'s first solution plus the shifts a sphere pays to roll it, median"),
     (">1st rolled", "share longer than BIT*'s first solution as a sphere would roll it"),
 )
+# printed only when the room-matched reference ran (--room-reference)
+ROOM_COLUMNS = (
+    ("room", "solved by BIT* asked to keep the room sphereplan's path keeps (up to the preferred clearance), of its "
+             "runs"),
+    ("x room", "per problem: sphereplan time ÷ that BIT*'s first-solution time, median"),
+    ("x room p90", "the same ratio, p90"),
+)
 
 
 def _loop_rate(solved: Sequence[RunRecord]) -> float:
@@ -240,6 +269,7 @@ def _fmt(value: float, digits: int = 2) -> str:
 def format_real_table(summaries: Sequence[MapSummary]) -> str:
     """The per-map table (fixed-width text) with a legend of the columns."""
     rows = []
+    room = any(s.room_runs > 0 for s in summaries)
     for s in summaries:
         rows.append([
             s.map, s.cells, _fmt(s.time_limit_s, 0), _fmt(s.setup_s, 3), str(s.problems), str(s.disconnected),
@@ -255,16 +285,18 @@ def format_real_table(summaries: Sequence[MapSummary]) -> str:
             _fmt(s.clearance_median_m, 3), _fmt(s.reported_clearance_median_m, 3), _fmt(s.shift_share_median, 3),
             _fmt(s.rolled_ratio_median, 3), _fmt(s.rolled_first_ratio_median, 3),
             _fmt(s.longer_than_rolled_first, 2),
-        ])
-    head = [c[0] for c in TABLE_COLUMNS]
+        ] + ([f"{s.room_solved}/{s.room_runs}", _fmt(s.room_ratio_median, 2), _fmt(s.room_ratio_p90, 2)]
+             if room else []))
+    columns = TABLE_COLUMNS + (ROOM_COLUMNS if room else ())
+    head = [c[0] for c in columns]
     widths = [max(len(head[i]), *(len(r[i]) for r in rows)) for i in range(len(head))]
     line = "  ".join(h.ljust(widths[i]) if i < 2 else h.rjust(widths[i]) for i, h in enumerate(head))
     out = [line, "-" * len(line)]
     for r in rows:
         out.append("  ".join(v.ljust(widths[i]) if i < 2 else v.rjust(widths[i]) for i, v in enumerate(r)))
     out.append("")
-    pad = max(len(short) for short, _ in TABLE_COLUMNS)
-    out.extend(f"  {short:{pad}s} {long}" for short, long in TABLE_COLUMNS[2:])
+    pad = max(len(short) for short, _ in columns)
+    out.extend(f"  {short:{pad}s} {long}" for short, long in columns[2:])
     return "\n".join(out)
 
 

@@ -80,7 +80,33 @@ def test_real_suite_without_reference_and_with_options(tmp_path: Path, capsys: p
         assert [r["planner"] for r in csv.DictReader(fh)] == ["sphereplan"]
 
 
+def test_real_suite_with_the_room_matched_reference(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """--room-reference: on every problem sphereplan solved, BIT* on its space with the footprint grown by the room
+    sphereplan's path keeps (at most the preferred 0.3 m, less 5 mm): the row records that room, and a path it finds
+    keeps it by the exact polygon."""
+    out_csv = tmp_path / "real.csv"
+    code = main(["bench", "--suite", "real", "--real-maps", "smoothers_world", "--per-map", "2", "--seed", "3",
+                 "--time-limit", "0.5", "--reference-time", "0.5", "--room-reference", "--csv", str(out_csv),
+                 "--png", str(tmp_path / "real.png")])
+    assert code == 0
+    out = capsys.readouterr().out
+    assert "x room" in out and "keeping sphereplan's room" in out
+    with out_csv.open() as fh:
+        rows = list(csv.DictReader(fh))
+    mine = {r["problem"]: r for r in rows if r["planner"] == "sphereplan"}
+    room = {r["problem"]: r for r in rows if r["planner"] == "bitstar-room-reeds-shepp"}
+    assert room and set(room) == {p for p, r in mine.items() if r["solved"] == "True"}
+    for p, r in room.items():
+        asked = float(r["reported_clearance_m"])
+        assert asked == pytest.approx(max(0.0, min(0.3, float(mine[p]["min_clearance_m"])) - 0.005), abs=1e-12)
+        if r["solved"] == "True":
+            assert float(r["min_clearance_m"]) >= asked - 0.002 * asked - 1e-9
+            assert float(r["first_length_m"]) > 0
+
+
 @pytest.mark.parametrize(("argv", "field"), [
+    (["--room-reference", "--no-reference"], "--room-reference"),
+    (["--room-reference", "--robot", "{robot}"], "--room-reference"),
     (["--per-map", "0"], "--per-map"),
     (["--real-maps", "atlantis"], "--real-maps"),
     (["--real-maps", "nowhere/map.yaml"], "--real-maps"),
@@ -89,8 +115,13 @@ def test_real_suite_without_reference_and_with_options(tmp_path: Path, capsys: p
     (["--reference-time", "-1"], "--reference-time"),
     (["--repeat", "0"], "--repeat"),
 ])
-def test_real_suite_bad_input_exits_2(argv: list[str], field: str, capsys: pytest.CaptureFixture[str]) -> None:
-    assert main(["bench", "--suite", "real", *argv]) == 2
+def test_real_suite_bad_input_exits_2(argv: list[str], field: str, capsys: pytest.CaptureFixture[str],
+                                      tmp_path: Path) -> None:
+    robot = tmp_path / "arrow.toml"  # a footprint that is not convex cannot be grown by a room
+    zju = (Path(__file__).resolve().parents[3] / "planner" / "robots" / "zju-60.toml").read_text()
+    robot.write_text(zju.replace('name = "zju-60"', 'name = "arrow"\n'
+                                 'footprint = [[0.45, 0.0], [-0.3, 0.35], [-0.1, 0.0], [-0.3, -0.35]]'))
+    assert main(["bench", "--suite", "real", *[a.replace("{robot}", str(robot)) for a in argv]]) == 2
     assert field in capsys.readouterr().err
 
 

@@ -15,6 +15,7 @@ from lab.planning.real.problems import DrawSettings, RealProblem, draw_problems
 from lab.planning.real.runs import (
     BIT_DUBINS,
     BIT_REEDS_SHEPP,
+    BIT_ROOM_REEDS_SHEPP,
     SPHEREPLAN,
     RunRecord,
     _record,
@@ -483,3 +484,37 @@ def test_summary_loop_expansions_per_second_counts_the_search_loop_time_only() -
     head, _, row = format_real_table([s]).splitlines()[:3]
     end = head.index("loop exp/s") + len("loop exp/s")
     assert row[:end].split()[-1] == "100000"
+
+
+def test_the_room_matched_reference_is_timed_against_not_counted_as_a_reference() -> None:
+    """--room-reference rows: sphereplan's time is divided by theirs (x room), and they count in no BIT* column:
+    a problem only they solve is not "missed", their lengths are no reference, their first solutions no ÷first."""
+    records = [
+        _rec(0, SPHEREPLAN, "solved", 0.02, length=11.0, clear=0.3),
+        _rec(0, BIT_REEDS_SHEPP, "solved", 0.001, length=10.0),
+        _rec(0, BIT_ROOM_REEDS_SHEPP, "solved", 0.010, length=6.0, reported=0.295),
+        _rec(1, SPHEREPLAN, "solved", 0.03, length=8.0, clear=0.1),
+        _rec(1, BIT_REEDS_SHEPP, "solved", 0.002, length=8.0),
+        _rec(1, BIT_ROOM_REEDS_SHEPP, "solved", 0.060, length=4.0, reported=0.095),
+        _rec(2, SPHEREPLAN, "timeout", 5.0),
+        _rec(2, BIT_REEDS_SHEPP, "unsolved", 5.0),
+        _rec(2, BIT_ROOM_REEDS_SHEPP, "solved", 0.1, length=3.0),  # (never run after a failure; counted anyway)
+        _rec(3, SPHEREPLAN, "solved", 0.04, length=5.0, clear=0.2),
+        _rec(3, BIT_REEDS_SHEPP, "solved", 0.004, length=5.0),
+        _rec(3, BIT_ROOM_REEDS_SHEPP, "crashed", 5.0),
+    ]
+    grid = OccupancyGrid.from_occupied(_room(), 0.05, name="m")
+    (s,) = summarise(with_reference_lengths(records, True), {"m": FootprintReferee.for_robot(grid, ROBOT)}, True,
+                     {"m": 0.1}, {"m": "240×120"})
+    assert (s.bit_reeds_shepp, s.bit_solved, s.missed, s.sphereplan, s.ref_failed) == (3, 3, 0, 3, 1)
+    assert (s.room_runs, s.room_solved) == (4, 3)
+    # problems 0 and 1 (sphereplan and the room reference solved): 0.02 / 0.010 = 2 and 0.03 / 0.060 = 0.5
+    assert s.room_ratio_median == pytest.approx(1.25) and s.room_ratio_p90 == pytest.approx(1.85)
+    assert s.both_ratio_median == pytest.approx(15.0)  # against plain BIT*: 20, 15 and 10
+    assert s.first_ratio_median == pytest.approx(1.0) and s.length_ratio_median == pytest.approx(1.0)
+    from lab.planning.real.summary import format_real_table
+
+    table = format_real_table([s])
+    assert "x room" in table and "3/4" in table and "1.25" in table
+    assert "x room" not in format_real_table(summarise(with_reference_lengths(
+        [r for r in records if r.planner != BIT_ROOM_REEDS_SHEPP], True), {}, True, {"m": 0.1}, {"m": ""}))

@@ -80,3 +80,32 @@ def test_inradius_and_circumradius_of_the_zju_polygon() -> None:
     checker = FootprintReferee.for_robot(grid, load_robot("zju-60"))
     assert checker.inradius_m == pytest.approx(0.32)  # the padded 16-gon's front edge: 0.30 / cos(π/16)·… + 0.02
     assert checker.circumradius_m == pytest.approx(float(np.hypot(ZJU[:, 0], ZJU[:, 1]).max()))
+
+
+@pytest.mark.parametrize("pad", [0.05, 0.3])
+def test_a_grown_polygon_collides_where_the_footprint_comes_within_the_pad(pad: float) -> None:
+    """The room-matched reference's check: the zju polygon grown by ``pad`` collides exactly where the brute-force
+    clearance of the polygon itself is below the pad (or it collides), up to the chords' GROWTH_ERROR × pad."""
+    from lab.planning.referee import GROWTH_ERROR
+
+    grid = _grid(4)
+    rng = np.random.default_rng(11)
+    plain = FootprintReferee(ZJU.copy(), grid.blocked(), grid.origin[:2], grid.resolution_m)
+    grown = plain.grown(pad)
+    assert grown.circumradius_m == pytest.approx(plain.circumradius_m + pad, abs=GROWTH_ERROR * pad + 1e-9)
+    poses = _random_poses(grid, rng, 400)
+    clearance = np.array([brute_clearance(grid, ZJU, p, 1.0) for p in poses])
+    hits = grown.collides_many(poses)
+    near = np.abs(clearance - pad) <= GROWTH_ERROR * pad + 1e-9
+    assert ((clearance < pad) & ~near).sum() > 15 and ((clearance > pad) & ~near).sum() > 15
+    np.testing.assert_array_equal(hits[~near], clearance[~near] < pad)
+
+
+def test_only_a_convex_footprint_is_grown() -> None:
+    from lab.planning.referee import grown_polygon
+
+    with pytest.raises(ValueError, match="convex"):
+        grown_polygon(ARROW, 0.1)
+    with pytest.raises(ValueError, match="pad"):
+        grown_polygon(ZJU, -0.1)
+    np.testing.assert_array_equal(grown_polygon(ZJU, 0.0), ZJU)
