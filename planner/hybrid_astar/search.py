@@ -36,7 +36,7 @@ import threading
 import time
 from collections import OrderedDict
 from collections.abc import Mapping
-from dataclasses import dataclass, fields
+from dataclasses import dataclass, fields, replace
 from functools import cached_property
 from typing import Any
 
@@ -91,6 +91,7 @@ GOAL_CHECK_SHARE = 0.15  # ... and at most this share of the time limit
 BUDGET_BINS = 72
 GOAL_SIDE_AFTER = 500  # expansions without a path before the goal side's search joins in (two_ended.py)
 MEET_AFTER = 2_000  # expansions of both sides before shots try to join their trees (meet.py) (×bins)
+FINER_BINS = 72  # a search that runs out of states at fewer heading bins is run again at this many (plan)
 ROOT_SHOT_AT_ONCE = True  # the start's own cheapest shot is the path at once, even rolling backwards (kernels 3c)
 HOLD_EXPANSIONS = 4_000  # a held-back shot (kernels 3c, P_HOLD_WAIT) waits this many for a path that rolls forwards
 # more (×bins)
@@ -301,6 +302,11 @@ def _take_kept(run: _Search) -> bool:
     return False
 
 
+class SearchRanOut(NoValidPathFound):
+    """The search ran out of states: from the start, or (the dead-end checks) from the goal. At its heading bins and
+    step that is no proof: :meth:`HybridAStar.plan` searches again at FINER_BINS (the caller sees NoValidPathFound)."""
+
+
 class _Search:
     """The arrays of one search (open heap, nodes, closed set) and chunked calls of the compiled loop."""
 
@@ -423,7 +429,12 @@ class HybridAStar:
     :class:`~planner.errors.PlanningError` subclass carrying the Nav2 error code.
     """
 
-    def __init__(self, grid: OccupancyGrid, robot: RobotProfile, options: PlannerOptions | None = None) -> None:
+    def __init__(self, grid: OccupancyGrid, robot: RobotProfile, options: PlannerOptions | None = None, *,
+                 clearance: ClearanceMap | None = None, holonomic_mult: np.ndarray | None = None,
+                 rs_table: np.ndarray | None = None) -> None:
+        """``clearance``, ``holonomic_mult`` and ``rs_table``, when given, are another planner's for the same grid,
+        robot and options but the heading bins (:meth:`finer`): shared, not computed again (the Reeds–Shepp table is
+        looked up at its own heading bins, a lower bound at any)."""
         self.options = options or PlannerOptions()
         n_bins = self.options.n_roll_bins or self.options.n_rolls
         self.grid = grid
@@ -432,7 +443,7 @@ class HybridAStar:
         self.polygon = robot.footprint_polygon
         self._px = np.ascontiguousarray(self.polygon[:, 0])
         self._py = np.ascontiguousarray(self.polygon[:, 1])
-        self.clearance = ClearanceMap(grid, self.options.allow_unknown)
+        self.clearance = clearance if clearance is not None else ClearanceMap(grid, self.options.allow_unknown)
         kmax = robot.max_curvature
         kappas = np.linspace(-kmax, kmax, self.options.n_rolls)
         kappas[self.options.n_rolls // 2] = 0.0
@@ -451,17 +462,17 @@ class HybridAStar:
         self.goal_side_ok = goal_side_possible(self)
         o = self.options
         self.reverse = robot.reversible if o.allow_reverse is None else o.allow_reverse
-        self.rs_table = rs_table_for(robot, o) if self.reverse else np.zeros((1, 1, 1))
+        self.rs_table = rs_table if rs_table is not None else rs_table_for(robot, o) if self.reverse else np.zeros(
+            (1, 1, 1))
         self.heuristic_factor = o.heuristic_downsample or auto_downsample(grid.data.shape)
         #: closed-set bitsets of finished searches, cleared, for the next ones (closed_set.BitsetPool)
         self.bitset_pool = closed_set.BitsetPool()
         self._base_params: dict[tuple[bool, PlannerOptions], np.ndarray] = {}  # _params without the goal
         self._child_turns: dict[tuple[float, float], np.ndarray] = {}  # child_turns per (step, long steps)
         self._heuristics: OrderedDict[tuple[int, int], HolonomicHeuristic] = OrderedDict()
-        self.holonomic_mult = coarse_cost_grid(self.clearance.clearance, self.centre_threshold_m,
-                                               self.footprint.radius_m,
-                                               max(o.proximity_range_m, robot.preferred_clearance_m), o.cost_penalty,
-                                               self.heuristic_factor)
+        self.holonomic_mult = holonomic_mult if holonomic_mult is not None else coarse_cost_grid(
+            self.clearance.clearance, self.centre_threshold_m, self.footprint.radius_m,
+            max(o.proximity_range_m, robot.preferred_clearance_m), o.cost_penalty, self.heuristic_factor)
 
     def holonomic(self, goal_xy: tuple[float, float], start_xy: tuple[float, float] | None = None,
                   stop_factor: float = STOP_FACTOR, cache: bool = True) -> HolonomicHeuristic:
@@ -629,9 +640,54 @@ class HybridAStar:
         clock = (termination or Termination()).start()
         _LOOP.clock = clock  # (a search outside a plan, as the tests run them, grows without this check)
         try:
-            return self._plan(start, goal, clock)
+            try:
+                return self._plan(start, goal, clock)
+            except SearchRanOut as coarse:
+                return self._plan_finer(start, goal, clock, coarse)
         finally:
             _LOOP.clock = None
+
+    def _plan_finer(self, start: Pose, goal: Pose, clock: Clock, coarse: SearchRanOut) -> PlanResult:
+        """The plan at FINER_BINS heading bins (:meth:`finer`) after the search at this planner's ran out of states
+        (``coarse``), within what is left of ``clock``: at 36 bins a step rolls 0.2 m and the closed set's cells are
+        10 cm, and a start a few centimetres from a wall (depot#1 of the real bench's seed 0 at three problems a map:
+        6 cm) may have no step that stays free, where a step of half that escapes (a path of 18 m in 2 114 expansions;
+        BIT* finds one too). The answer says so (``extra.finer_search``); when that search runs out as well, the plan
+        raises NoValidPathFound with both counts."""
+        finer = self.finer()
+        if finer is None or clock.expired() or clock.cancelled():
+            raise NoValidPathFound(coarse.msg, planning_time_s=coarse.planning_time_s,
+                                   expansions=coarse.expansions) from None
+        try:
+            result = finer._plan(start, goal, clock)
+        except SearchRanOut as again:
+            raise NoValidPathFound(
+                f"{again.msg} at {finer.options.n_yaw_bins} heading bins, as at {self.options.n_yaw_bins} "
+                f"({coarse.expansions} expansions)",
+                planning_time_s=time.perf_counter() - clock.t0, expansions=coarse.expansions + again.expansions,
+            ) from None
+        except PlanningError as exc:
+            exc.expansions += coarse.expansions
+            raise
+        result.expansions += coarse.expansions
+        result.extra["finer_search"] = {"n_yaw_bins": finer.options.n_yaw_bins,
+                                        "coarse_expansions": coarse.expansions, "coarse_reason": coarse.msg}
+        return result
+
+    def finer(self) -> HybridAStar | None:
+        """This planner at FINER_BINS heading bins (its step and closed-set cells follow), sharing its clearance map,
+        its coarse cost grid, its holonomic tables as they are now (a live map's updates and a guided plan's swapped
+        grid included: none depends on the bins) and its Reeds–Shepp table (not built again at 72 bins: a second);
+        None when this one has that many or more."""
+        if self.options.n_yaw_bins >= FINER_BINS:
+            return None
+        finer = self.__dict__.get("_finer")
+        if finer is None or finer.clearance is not self.clearance:
+            finer = HybridAStar(self.grid, self.robot, replace(self.options, n_yaw_bins=FINER_BINS),
+                                clearance=self.clearance, holonomic_mult=self.holonomic_mult, rs_table=self.rs_table)
+            self.__dict__["_finer"] = finer
+        finer.holonomic_mult, finer._heuristics = self.holonomic_mult, self._heuristics
+        return finer
 
     def _plan(self, start: Pose, goal: Pose, clock: Clock) -> PlanResult:
         t0 = clock.t0
@@ -761,7 +817,7 @@ class HybridAStar:
             if status == kernels.FOUND:
                 return side
             if status == kernels.EXHAUSTED:
-                raise NoValidPathFound(
+                raise SearchRanOut(
                     f"no valid path: the search exhausted every state reachable from the start "
                     f"({run.expansions} expansions)", planning_time_s=time.perf_counter() - t0,
                     expansions=run.expansions)
@@ -773,7 +829,7 @@ class HybridAStar:
                                          and side.meet(run, clock))):
                 if side.motions is not None:
                     return side
-                raise NoValidPathFound(
+                raise SearchRanOut(
                     f"no valid path: the goal pose ({goal[0]:.2f}, {goal[1]:.2f}, yaw {goal[2]:.2f}) can be "
                     f"reached from only {side.expansions} states around it, none of them the start's (a dead end "
                     f"or a heading into an obstacle)", planning_time_s=time.perf_counter() - t0,
@@ -784,7 +840,7 @@ class HybridAStar:
                 checked_goal = True
                 back = self._reverse_search(start, goal, o, clock.share(GOAL_CHECK_SHARE))
                 if back is not None:
-                    raise NoValidPathFound(
+                    raise SearchRanOut(
                         f"no valid path: the goal pose ({goal[0]:.2f}, {goal[1]:.2f}, yaw {goal[2]:.2f}) can be "
                         f"reached from only {back} states around it, none of them the start's (a dead end or a "
                         f"heading into an obstacle)", planning_time_s=time.perf_counter() - t0,
