@@ -470,6 +470,7 @@ class HybridAStar:
         self._base_params: dict[tuple[bool, PlannerOptions], np.ndarray] = {}  # _params without the goal
         self._child_turns: dict[tuple[float, float], np.ndarray] = {}  # child_turns per (step, long steps)
         self._heuristics: OrderedDict[tuple[int, int], HolonomicHeuristic] = OrderedDict()
+        self._finer: HybridAStar | None = None  # this planner at FINER_BINS, made when first needed (finer)
         self.holonomic_mult = holonomic_mult if holonomic_mult is not None else coarse_cost_grid(
             self.clearance.clearance, self.centre_threshold_m, self.footprint.radius_m,
             max(o.proximity_range_m, robot.preferred_clearance_m), o.cost_penalty, self.heuristic_factor)
@@ -651,9 +652,9 @@ class HybridAStar:
         """The plan at FINER_BINS heading bins (:meth:`finer`) after the search at this planner's ran out of states
         (``coarse``), within what is left of ``clock``: at 36 bins a step rolls 0.2 m and the closed set's cells are
         10 cm, and a start a few centimetres from a wall (depot#1 of the real bench's seed 0 at three problems a map:
-        6 cm) may have no step that stays free, where a step of half that escapes (a path of 18 m in 2 114 expansions;
-        BIT* finds one too). The answer says so (``extra.finer_search``); when that search runs out as well, the plan
-        raises NoValidPathFound with both counts."""
+        6 cm) may have no step that stays free, where a step of half that escapes (a path of 18 m in 2 114 expansions
+        after the first search's 7; BIT* finds one too). The answer says so (``extra.finer_search``); when that
+        search runs out as well, the plan raises NoValidPathFound with both counts."""
         finer = self.finer()
         if finer is None or clock.expired() or clock.cancelled():
             raise NoValidPathFound(coarse.msg, planning_time_s=coarse.planning_time_s,
@@ -681,11 +682,11 @@ class HybridAStar:
         None when this one has that many or more."""
         if self.options.n_yaw_bins >= FINER_BINS:
             return None
-        finer = self.__dict__.get("_finer")
+        finer = self._finer
         if finer is None or finer.clearance is not self.clearance:
-            finer = HybridAStar(self.grid, self.robot, replace(self.options, n_yaw_bins=FINER_BINS),
-                                clearance=self.clearance, holonomic_mult=self.holonomic_mult, rs_table=self.rs_table)
-            self.__dict__["_finer"] = finer
+            finer = self._finer = HybridAStar(self.grid, self.robot, replace(self.options, n_yaw_bins=FINER_BINS),
+                                              clearance=self.clearance, holonomic_mult=self.holonomic_mult,
+                                              rs_table=self.rs_table)
         finer.holonomic_mult, finer._heuristics = self.holonomic_mult, self._heuristics
         return finer
 
