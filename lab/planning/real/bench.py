@@ -23,7 +23,7 @@ from lab.planning.real.runs import (
     with_reference_lengths,
 )
 from lab.planning.real.summary import MapSummary, summarise
-from lab.planning.referee import FootprintReferee, grown_polygon
+from lab.planning.referee import DEFAULT_REACH_M, FootprintReferee, grown_polygon
 from planner.errors import (
     PlanningError,
 )
@@ -140,8 +140,8 @@ def run_real_bench(
                     room = room_asked_m(mine, robot)
                     record = _timed_reference(worker, problem, grid, robot, checker, room_space(reverse_allowed),
                                               limit, 0.0, str(path), repeat, room)
-                    if record.solved:  # the grown polygon's clearance is the true one less the room
-                        record = replace(record, min_clearance_m=record.min_clearance_m + room)
+                    if record.solved:  # the grown polygon's clearance is the true one less the room (both capped)
+                        record = replace(record, min_clearance_m=min(record.min_clearance_m + room, DEFAULT_REACH_M))
                     records.append(replace(record, reported_clearance_m=room))
                     if progress:
                         progress(f"{problem.name} {record.planner}")

@@ -11,7 +11,15 @@ from typing import Any
 
 import numpy as np
 
-from lab.planning.real.runs import BIT_DUBINS, BIT_REEDS_SHEPP, SHORT_NAMES, SPHEREPLAN, RunRecord
+from lab.planning.real.runs import (
+    BIT_DUBINS,
+    BIT_REEDS_SHEPP,
+    BIT_ROOM_DUBINS,
+    BIT_ROOM_REEDS_SHEPP,
+    SHORT_NAMES,
+    SPHEREPLAN,
+    RunRecord,
+)
 from lab.planning.real.summary import MapSummary
 
 log = logging.getLogger(__name__)
@@ -34,8 +42,10 @@ def real_figure(records: Sequence[RunRecord], summaries: Sequence[MapSummary], t
 
     plt = pyplot()
 
-    planners = [p for p in (SPHEREPLAN, BIT_DUBINS, BIT_REEDS_SHEPP) if any(r.planner == p for r in records)]
-    colours = {SPHEREPLAN: "tab:blue", BIT_DUBINS: "tab:orange", BIT_REEDS_SHEPP: "tab:green"}
+    planners = [p for p in (SPHEREPLAN, BIT_DUBINS, BIT_REEDS_SHEPP, BIT_ROOM_DUBINS, BIT_ROOM_REEDS_SHEPP)
+                if any(r.planner == p for r in records)]
+    colours = {SPHEREPLAN: "tab:blue", BIT_DUBINS: "tab:orange", BIT_REEDS_SHEPP: "tab:green",
+               BIT_ROOM_DUBINS: "tab:olive", BIT_ROOM_REEDS_SHEPP: "tab:cyan"}
     maps = list(dict.fromkeys(r.map for r in records))
     problems = list(dict.fromkeys((r.map, r.problem) for r in records))
     labels = [f"{m}#{i}" for m, i in problems]
@@ -67,7 +77,9 @@ def real_figure(records: Sequence[RunRecord], summaries: Sequence[MapSummary], t
     per_map = max(sum(1 for r in records if r.map == m and r.planner == planners[0]) for m in maps)
     ax.set_ylim(0, per_map * 1.45)
     ax.set_ylabel("problems")
-    ax.set_title("outcome per map and planner (sp = sphereplan, D = BIT* Dubins, RS = BIT* Reeds–Shepp)")
+    room = any(p in (BIT_ROOM_DUBINS, BIT_ROOM_REEDS_SHEPP) for p in planners)
+    ax.set_title("outcome per map and planner (sp = sphereplan, D = BIT* Dubins, RS = BIT* Reeds–Shepp"
+                 + (", roomD / roomRS = BIT* keeping sphereplan's room, run where sphereplan solved)" if room else ")"))
     handles, names = ax.get_legend_handles_labels()
     unique = dict(zip(names, handles, strict=True))
     legend_right(ax, list(unique.values()))

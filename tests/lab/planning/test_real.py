@@ -246,6 +246,11 @@ def test_real_figure_marks_unsolvable_and_explains_the_dashed_line() -> None:
     fig = real_figure(records, [], "title")
     labels = legend_labels(fig)
     assert "5 % longer than the reference" in labels
+    assert not any("room" in label for label in labels)
+    # with the room-matched reference: its own marks, named
+    room = real_figure([*records, _rec(0, BIT_ROOM_REEDS_SHEPP, "solved", 0.3, length=10.8, clear=0.31)], [], "t")
+    assert f"{BIT_ROOM_REEDS_SHEPP} (BIT*: first solution)" in legend_labels(room)
+    assert "roomRS" in room.axes[0].get_title() and "roomRS" in [t.get_text() for t in room.axes[0].texts]
     assert any(label.startswith("unsolvable") for label in labels)
     assert [t.get_text() for t in fig.axes[1].get_xticklabels()] == ["m#0", "m#1 (unsolvable)"]
     fig.canvas.draw()
@@ -518,3 +523,30 @@ def test_the_room_matched_reference_is_timed_against_not_counted_as_a_reference(
     assert "x room" in table and "3/4" in table and "1.25" in table
     assert "x room" not in format_real_table(summarise(with_reference_lengths(
         [r for r in records if r.planner != BIT_ROOM_REEDS_SHEPP], True), {}, True, {"m": 0.1}, {"m": ""}))
+
+
+def test_the_room_run_gets_the_grown_checker_and_reports_the_true_clearance(monkeypatch: pytest.MonkeyPatch) -> None:
+    """run_real_bench(room_reference=True): the worker's checker is grown by the room asked (the stub reports the
+    polygon's circumradius as its clearance), the row reports that room and the grown clearance plus the room, capped
+    at the referee's 2 m as every clearance is."""
+    from lab.planning.real import bench, isolated
+    from lab.planning.real.runs import room_asked_m
+    from lab.planning.referee import DEFAULT_REACH_M
+    from tests.lab.planning import reference_stubs
+
+    class Stubbed(isolated.ReferenceWorker):
+        def __init__(self, ompl_seed: int = 1) -> None:
+            super().__init__(ompl_seed, runner=reference_stubs.reports_the_grown_polygon)
+
+    monkeypatch.setattr(bench, "ReferenceWorker", Stubbed)
+    result = bench.run_real_bench(["smoothers_world"], ROBOT, 2, 21, time_limit_s=1.0, room_reference=True)
+    plain = FootprintReferee.for_robot(SMOOTHERS, ROBOT)
+    for i in range(2):
+        mine = next(r for r in result.records if r.problem == i and r.planner == SPHEREPLAN)
+        room = next(r for r in result.records if r.problem == i and r.planner == BIT_ROOM_REEDS_SHEPP)
+        assert mine.solved and room.reported_clearance_m == room_asked_m(mine, ROBOT) > 0
+        grown = plain.circumradius_m + room.reported_clearance_m  # what the worker's grown polygon reaches
+        expected = DEFAULT_REACH_M if i == 1 else grown + room.reported_clearance_m
+        assert room.min_clearance_m == pytest.approx(expected, abs=1e-3)
+    with pytest.raises(ValueError, match="reference"):
+        bench.run_real_bench(["smoothers_world"], ROBOT, 1, 21, reference=False, room_reference=True)
