@@ -110,16 +110,14 @@ def run_real(args: argparse.Namespace) -> int:
     reference_s = DEFAULT_REFERENCE_S if args.reference_time is None else args.reference_time
     if reference_s < 0:
         raise InvalidInput("--reference-time", "must be ≥ 0 (0 = until the time limit)")
-    if args.room_reference and args.no_reference:
-        raise InvalidInput("--room-reference", "needs the reference: leave out --no-reference")
     robot = load_robot(args.robot)
     if args.room_reference:
-        from lab.planning.referee import grown_polygon
+        from lab.planning.real.bench import check_room_reference
 
         try:
-            grown_polygon(robot.footprint_polygon, 0.0)
+            check_room_reference(robot, not args.no_reference)
         except ValueError as exc:
-            raise InvalidInput("--room-reference", f"robot {robot.name!r}: {exc}") from None
+            raise InvalidInput("--room-reference", str(exc)) from None
     options = _options(args.options)
     given = args.real_maps if args.real_maps is not None else ",".join(real_map_names())
     specs = [m.strip() for m in given.split(",") if m.strip()]

@@ -550,6 +550,8 @@ def test_every_verb_ends_with_a_summary_line(capsys: pytest.CaptureFixture[str],
     # ... and its join of the two trees from 2 000 expansions (pockets#2 of seed 0: found from both sides)
     ("pockets", (6.125, 10.075, 2.9092350581717223), (19.325, 14.725, 2.599295721958983), "goal_side_expansions",
      {}),
+    # issue 21's twenty-first round: a start 6 cm from a shelf that the 36-bin search cannot leave, planned at 72 bins
+    ("depot", (18.425, 4.325, -0.7308754819569288), (29.375, 7.125, 3.0211775357715274), "finer_search", {}),
 ])
 def test_a_real_map_plan_is_the_same_at_every_door(client: httpx.Client, server: Server,
                                                      capsys: pytest.CaptureFixture[str], name: str,

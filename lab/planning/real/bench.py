@@ -23,12 +23,13 @@ from lab.planning.real.runs import (
     with_reference_lengths,
 )
 from lab.planning.real.summary import MapSummary, summarise
-from lab.planning.referee import DEFAULT_REACH_M, FootprintReferee, grown_polygon
+from lab.planning.referee import DEFAULT_REACH_M, FootprintReferee
 from planner.errors import (
     PlanningError,
 )
 from planner.hybrid_astar.plan import plan_path, planner_for
 from planner.hybrid_astar.search import PlannerOptions
+from planner.maps.clearance import convex_turn
 from planner.occupancy import OccupancyGrid
 from planner.robot import RobotProfile
 from planner.termination import Termination
@@ -93,10 +94,8 @@ def run_real_bench(
     """
     if repeat < 1:
         raise ValueError(f"repeat must be at least 1, not {repeat}")
-    if room_reference and not reference:
-        raise ValueError("the room-matched reference runs with the reference (reference=True)")
     if room_reference:
-        grown_polygon(robot.footprint_polygon, 0.0)  # a footprint that cannot be grown is refused before any run
+        check_room_reference(robot, reference)
     from planner.maps.nav2 import load_map
 
     opts = options or PlannerOptions()
@@ -151,6 +150,16 @@ def run_real_bench(
     final = with_reference_lengths(records, reverse_allowed)
     summaries = summarise(final, checkers, reverse_allowed, setup, cells)
     return RealBenchResult(tuple(final), tuple(summaries), tuple(drawn), robot.name, seed, reverse_allowed)
+
+
+def check_room_reference(robot: RobotProfile, reference: bool) -> None:
+    """Refuse (ValueError, saying why) a room-matched reference that cannot run: it needs the reference's worker,
+    and a footprint that can be grown by a pad (a convex one: :func:`~lab.planning.referee.grown_polygon`)."""
+    if not reference:
+        raise ValueError("it runs with the reference (BIT*): leave the reference on")
+    poly = np.asarray(robot.footprint_polygon, dtype=np.float64)
+    if convex_turn(np.ascontiguousarray(poly[:, 0]), np.ascontiguousarray(poly[:, 1])) == 0:
+        raise ValueError(f"robot {robot.name!r}: only a convex footprint can be grown by the room (this one is not)")
 
 
 def _timed_reference(worker: ReferenceWorker, problem: RealProblem, grid: OccupancyGrid, robot: RobotProfile,
