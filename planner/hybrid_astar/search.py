@@ -101,6 +101,8 @@ FORWARD_RETRY_MIN = 1_000  # ... at least this many
 FORWARD_RETRY_MAX = 20_000  # ... and at most this many (docs/planning.md: the budgets the accepted paths needed)
 FORWARD_RETRY_SHARE = 0.5  # ... tried when the path found rolls more than this share of its length backwards
 FORWARD_RETRY_TIMES = 3  # ... and at most this many × the plan's expansions before it
+NO_HOLD_SHARE = 2.0  # P_BACK_SHARE with prefer_forward off: no shot rolls more than this share backwards, so none
+# is held back (3c) or kept as a mostly-backwards fallback (3d)
 FORWARD_CHECK_BUDGET = 600  # ... and this many more for its goal side, which proves there is no forward path
 # cheaper when it runs out of states (×bins)
 FORWARD_SLICE = 100  # ... the two sides taking turns of this many expansions (issue 21's eighteenth round)
@@ -149,7 +151,8 @@ class PlannerOptions:
     smooth: bool = True               # shortcut the search's path with collision-checked rollable Dubins shots
     smooth_max_tries: int = 24        # candidate shortcut targets tried per path knot (half in the later passes)
     smooth_passes: int = 3            # shortcut passes; later passes re-subdivide the path (≈ 2 % shorter)
-    prefer_forward: bool = True       # with reversing: also try a bounded forward-only search, keep the cheaper
+    prefer_forward: bool = True       # with reversing: hold back a mostly-backwards shot for a path that turns round
+    # and try a bounded forward-only search, the cheaper kept (false: neither, the search's path as it finds it)
     weighted_rs_heuristic: bool = False  # with reversing: the Reeds–Shepp heuristic prices reversing and cusps
     improve_until_s: float = 0.0      # anytime: look for cheaper paths until this many s from the start (0 = off)
 
@@ -322,7 +325,7 @@ class _Search:
         p[kernels.P_BEST_H] = math.inf
         p[kernels.P_CLOSER_H] = math.inf
         p[kernels.P_HELD_COST] = math.inf
-        p[kernels.P_BACK_SHARE] = FORWARD_RETRY_SHARE
+        p[kernels.P_BACK_SHARE] = FORWARD_RETRY_SHARE if o.prefer_forward else NO_HOLD_SHARE
         p[kernels.P_BOUND] = math.inf
         self.p = p
         self.turns = planner.child_turns(p)

@@ -185,16 +185,22 @@ def _backwards_m(states: np.ndarray) -> float:
 
 def test_a_mostly_backwards_shot_is_held_back_while_the_search_goes_on() -> None:
     """The goal 8 m straight behind: the shot from the start rolls backwards all the way, so it is held back, not
-    taken; the search's own path (also backwards: there is no room to turn round) comes first."""
+    taken; the search's own path (also backwards: there is no room to turn round) comes first. With
+    ``prefer_forward`` off nothing is held: the shot is the path at the first expansion."""
     grid = _corridor()
-    planner = HybridAStar(grid, ROBOT, PlannerOptions(prefer_forward=False))
     start, goal = (12.0, 0.75, 0.0), (4.0, 0.75, 0.0)
+    planner = HybridAStar(grid, ROBOT)
     run = _Search(planner, start, goal, planner.holonomic(goal[:2], start[:2]), planner.options, True)
     assert run.step(100_000) == kernels.FOUND
     wait = planner.budget(search.HOLD_EXPANSIONS)  # the wait scales with the heading bins (search.BUDGET_BINS)
     assert wait == search.HOLD_EXPANSIONS * planner.options.n_yaw_bins // search.BUDGET_BINS
     assert run.counters[kernels.C_HELD_UNTIL] == 1 + wait  # held at the first expansion
     assert run.counters[kernels.C_SHOT_SEGS] == 0 and run.expansions < wait
+    free = HybridAStar(grid, ROBOT, PlannerOptions(prefer_forward=False))
+    run = _Search(free, start, goal, free.holonomic(goal[:2], start[:2]), free.options, True)
+    assert run.step(100_000) == kernels.FOUND
+    assert run.counters[kernels.C_HELD_UNTIL] == 0 and run.counters[kernels.C_HELD_SEGS] == 0
+    assert run.counters[kernels.C_SHOT_SEGS] > 0 and run.expansions == 1
 
 
 def test_the_held_back_shot_is_the_path_when_the_search_runs_out(monkeypatch) -> None:
@@ -202,8 +208,7 @@ def test_the_held_back_shot_is_the_path_when_the_search_runs_out(monkeypatch) ->
     monkeypatch.setattr(search, "ROOT_SHOT_AT_ONCE", False)
     grid = _corridor()
     start, goal = (12.0, 0.75, 0.0), (4.0, 0.75, 0.0)
-    result = HybridAStar(grid, ROBOT, PlannerOptions(prefer_forward=False)).plan(
-        start, goal, Termination(max_iterations=20))
+    result = HybridAStar(grid, ROBOT).plan(start, goal, Termination(max_iterations=20))
     assert check_path(grid, ROBOT, result.states, start, goal) == []
     assert result.analytic_segments > 0 and result.expansions == 20
     assert _backwards_m(result.states) > 0.95 * result.length_m

@@ -56,8 +56,10 @@ def test_a_path_rolled_backwards_is_smoothed(garage, robot) -> None:
     states = result.states
     assert _backwards_m(states) > 0.8 * result.length_m  # the search rolls this U-turn backwards
     assert check_path(garage, robot, states, START, GOAL) == []
-    # the search's zig-zag of held rolls is shortcut: before, the reverse stretch kept it (29.1 m, 62 changes)
-    assert result.length_m < 0.9 * result.extra["unsmoothed_length_m"]
+    # the search's zig-zag of held rolls is shortcut: before, the reverse stretch kept it (29.1 m, 62 changes). (Since
+    # prefer_forward off holds no shot back, the raw path ends in the search's first backwards shot: 26.4 m → 23.9 m
+    # for the boom, 27.3 → 23.3 m when the search went on for 614 expansions.)
+    assert result.length_m < 0.92 * result.extra["unsmoothed_length_m"]
     assert _roll_sign_changes(states) <= 12
 
 
@@ -340,3 +342,22 @@ def test_a_manoeuvre_in_a_path_that_rolls_backwards_is_shortcut_with_a_reverse_s
     assert planner._length(start, out) < 0.7 * planner._length(start, shuffle)  # 3.51 → 2.10 m
     end, want = planner._knots(start, out)[-1], planner._knots(start, shuffle)[-1]
     assert np.allclose(end[:4], want[:4], atol=1e-5)  # the same pose and roll at the end
+
+
+def test_prefer_forward_off_takes_the_path_as_the_search_finds_it() -> None:
+    """depot#20 of the real bench's seed-0 draw at 40 a map: the goal 23 m behind. By default the search holds back
+    its shot that rolls mostly backwards and looks for a path that turns round (kernels 3c); here it finds a dearer
+    one, so the held shot is the path after 603 expansions. With ``prefer_forward`` off nothing is held and no
+    forward-only search runs: the same path in 25 (issue 21's twenty-second round: the option switches off the
+    whole forward preference, not only the forward-only search)."""
+    grid = load_map("maps/real/depot.yaml")
+    start, goal = (1.725, 7.575, 3.060120748362473), (24.225, 8.975, -2.3643296132075022)
+    held = HybridAStar(grid, ROBOT).plan(start, goal)
+    free = HybridAStar(grid, ROBOT, PlannerOptions(prefer_forward=False)).plan(start, goal)
+    for result in (held, free):
+        assert check_path(grid, ROBOT, result.states, start, goal) == []
+        assert _backwards_m(result.states) > 0.9 * result.length_m
+    assert held.extra.get("held_shot_taken") is True
+    assert not {"held_shot_taken", "fallback_shot_taken", "forward_alternative_expansions"} & set(free.extra)
+    assert free.expansions * 10 < held.expansions
+    assert free.length_m == pytest.approx(held.length_m, abs=1e-3)
