@@ -105,6 +105,7 @@ class RunRecord:
     search_loop_s: float = math.nan
     shift_m: float = math.nan
     first_shift_m: float = math.nan
+    backwards_m: float = math.nan
 
 
 CSV_COLUMNS = tuple(f.name for f in fields(RunRecord))
@@ -114,7 +115,7 @@ def _record(problem: RealProblem, planner: str, status: str, time_s: float, time
             valid: bool = False, first_length_m: float = math.nan, length_m: float = math.nan,
             min_clearance_m: float = math.nan, reported_clearance_m: float = math.nan, reverses: bool = False,
             expansions: int = -1, message: str = "", search_loop_s: float = math.nan,
-            shift_m: float = math.nan, first_shift_m: float = math.nan) -> RunRecord:
+            shift_m: float = math.nan, first_shift_m: float = math.nan, backwards_m: float = math.nan) -> RunRecord:
     return RunRecord(
         map=problem.map_name, problem=problem.index, start_x=problem.start[0], start_y=problem.start[1],
         start_yaw=problem.start[2], goal_x=problem.goal[0], goal_y=problem.goal[1], goal_yaw=problem.goal[2],
@@ -123,7 +124,7 @@ def _record(problem: RealProblem, planner: str, status: str, time_s: float, time
         first_length_m=first_length_m, length_m=length_m, reference_length_m=math.nan, length_ratio=math.nan,
         min_clearance_m=min_clearance_m, reported_clearance_m=reported_clearance_m, valid=valid,
         reverses=reverses, expansions=expansions, message=message, search_loop_s=search_loop_s, shift_m=shift_m,
-        first_shift_m=first_shift_m,
+        first_shift_m=first_shift_m, backwards_m=backwards_m,
     )
 
 
@@ -174,6 +175,12 @@ def shift_of_rolls(rolls: np.ndarray, radius_m: float) -> float:
     radius × the total roll change (eq. 1)."""
     held = np.asarray(rolls, dtype=float).reshape(-1)
     return float(radius_m * np.abs(np.diff(np.concatenate(([0.0], held, [0.0])))).sum())
+
+
+def backwards_m(states: np.ndarray) -> float:
+    """Metres a sphereplan path (its ``states``, docs/contracts.md: column 4 the signed speed, 6 the arc length) rolls
+    backwards."""
+    return float(np.diff(states[:, 6])[states[1:, 4] < 0].sum())
 
 
 def _reverses(poses: np.ndarray) -> bool:
@@ -256,7 +263,8 @@ def run_sphereplan(problem: RealProblem, grid: OccupancyGrid, robot: RobotProfil
                    first_length_m=result.length_m, length_m=result.length_m,
                    min_clearance_m=checker.min_clearance(dense), reported_clearance_m=result.min_clearance_m,
                    reverses=bool((result.states[:, 4] < 0).any()), expansions=int(result.expansions),
-                   message=message, search_loop_s=loop_s, shift_m=shift, first_shift_m=shift)
+                   message=message, search_loop_s=loop_s, shift_m=shift, first_shift_m=shift,
+                   backwards_m=backwards_m(result.states))
 
 
 def run_reference(problem: RealProblem, grid: OccupancyGrid, robot: RobotProfile, checker: FootprintReferee,

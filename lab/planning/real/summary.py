@@ -60,7 +60,9 @@ class MapSummary:
     ``room_runs``, ``room_solved``: runs and solutions of the room-matched reference (``--room-reference``: BIT* with
     the footprint grown by the room sphereplan's path keeps, on the problems sphereplan solved; not a solvability or
     length reference, and not counted in ``bit_*`` or ``missed``), ``room_ratio_*``: sphereplan's time ÷ its
-    first-solution time, per problem where it solved, median and p90.
+    first-solution time, per problem where it solved, median and p90; ``backwards_share``: the metres sphereplan's
+    paths roll backwards ÷ their length, summed over its solved problems that record it (what ``prefer_forward``
+    buys).
     """
 
     map: str
@@ -105,6 +107,7 @@ class MapSummary:
     room_solved: int = 0
     room_ratio_median: float = math.nan
     room_ratio_p90: float = math.nan
+    backwards_share: float = math.nan
 
 
 def _median(values: Sequence[float]) -> float:
@@ -206,7 +209,14 @@ def _summary(name: str, records: list[RunRecord], checker: FootprintReferee | No
         rolled_first_ratio_median=_median(rolled_first), longer_than_rolled_first=_share_longer(rolled_first),
         room_runs=len(room_runs), room_solved=sum(1 for r in room_runs if r.solved),
         room_ratio_median=_median(room_ratio), room_ratio_p90=_p90(room_ratio),
+        backwards_share=_share_backwards(solved),
     )
+
+
+def _share_backwards(solved: Sequence[RunRecord]) -> float:
+    """Metres rolled backwards ÷ length over the solved runs that record them (NaN when none does)."""
+    known = [r for r in solved if math.isfinite(r.backwards_m) and r.length_m > 0]
+    return sum(r.backwards_m for r in known) / sum(r.length_m for r in known) if known else math.nan
 
 
 def _share_longer(ratios: Sequence[float]) -> float:
@@ -244,6 +254,7 @@ TABLE_COLUMNS = (
     ("÷rolled", "length ÷ the reference's best plus the shifts a sphere pays to roll it, median"),
     ("÷1st rolled", "length ÷ BIT*'s first solution plus the shifts a sphere pays to roll it, median"),
     (">1st rolled", "share longer than BIT*'s first solution as a sphere would roll it"),
+    ("back", "share of sphereplan's metres rolled backwards (all its solved paths)"),
 )
 # printed only when the room-matched reference ran (--room-reference)
 ROOM_COLUMNS = (
@@ -284,7 +295,7 @@ def format_real_table(summaries: Sequence[MapSummary]) -> str:
             _fmt(s.loop_expansions_per_s, 0), _fmt(s.expansions_per_m, 0),
             _fmt(s.clearance_median_m, 3), _fmt(s.reported_clearance_median_m, 3), _fmt(s.shift_share_median, 3),
             _fmt(s.rolled_ratio_median, 3), _fmt(s.rolled_first_ratio_median, 3),
-            _fmt(s.longer_than_rolled_first, 2),
+            _fmt(s.longer_than_rolled_first, 2), _fmt(s.backwards_share, 2),
         ] + ([f"{s.room_solved}/{s.room_runs}", _fmt(s.room_ratio_median, 2), _fmt(s.room_ratio_p90, 2)]
              if room else []))
     columns = TABLE_COLUMNS + (ROOM_COLUMNS if room else ())

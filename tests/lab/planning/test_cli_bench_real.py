@@ -17,7 +17,7 @@ DOCUMENTED_COLUMNS = (
     "map", "problem", "start_x", "start_y", "start_yaw", "goal_x", "goal_y", "goal_yaw", "distance_m",
     "disconnected", "planner", "status", "solved", "time_s", "time_limit_s", "first_length_m", "length_m",
     "reference_length_m", "length_ratio", "min_clearance_m", "reported_clearance_m", "valid", "reverses",
-    "expansions", "message", "search_loop_s", "shift_m", "first_shift_m",
+    "expansions", "message", "search_loop_s", "shift_m", "first_shift_m", "backwards_m",
 )
 
 
@@ -49,7 +49,7 @@ def test_real_suite_on_a_small_map(tmp_path: Path, capsys: pytest.CaptureFixture
     assert code == 0
     captured = capsys.readouterr()
     assert "smoothers_world" in captured.out and "BIT*RS" in captured.out and "missed" in captured.out
-    assert "÷rolled" in captured.out and ">1st rolled" in captured.out
+    assert "÷rolled" in captured.out and ">1st rolled" in captured.out and " back" in captured.out
     assert "\r" not in captured.err  # progress bars only on a terminal (stderr is captured here)
     with out_csv.open() as fh:
         reader = csv.DictReader(fh)

@@ -213,6 +213,7 @@ def test_summary_counts_and_medians() -> None:
         assert s.length_ratio_median == pytest.approx(ratio) and s.length_ratio_max == pytest.approx(ratio)
         assert s.clearance_median_m == pytest.approx(0.3) and s.reported_clearance_median_m == pytest.approx(0.05)
         assert math.isnan(s.shift_share_median) and math.isnan(s.rolled_ratio_median)  # no shifts recorded
+        assert math.isnan(s.backwards_share)  # nor metres backwards
     # with shifts: sphereplan's 0.44 m of 11 m; the references as a sphere would roll them, 10.5 + 0.3 (Dubins)
     # and 10.0 + 0.9 (Reeds–Shepp, more turns): the shortest rolled is Dubins's even where Reeds–Shepp is allowed
     shifts = {(0, SPHEREPLAN): 0.44, (0, BIT_DUBINS): 0.3, (0, BIT_REEDS_SHEPP): 0.9}
@@ -230,6 +231,11 @@ def test_summary_counts_and_medians() -> None:
         (s,) = summarise(with_reference_lengths(records, reverse), checkers, reverse, {"m": 0.1}, {"m": "240×120"})
         assert s.rolled_first_ratio_median == pytest.approx(11.0 / 11.1) and s.longer_than_rolled_first == 0.0
         assert s.longer_than_first == 1.0 and s.rolled_ratio_median == pytest.approx(11.0 / 10.8)
+    # metres rolled backwards: sphereplan's solved path only (the invalid path of problem 4 is not solved), ÷ length
+    backwards = {(0, SPHEREPLAN): 4.4, (4, SPHEREPLAN): 5.0, (0, BIT_REEDS_SHEPP): 10.0}
+    records = [replace(r, backwards_m=backwards.get((r.problem, r.planner), math.nan)) for r in records]
+    (s,) = summarise(with_reference_lengths(records, True), checkers, True, {"m": 0.1}, {"m": "240×120"})
+    assert s.backwards_share == pytest.approx(0.4)
 
 
 def test_real_figure_marks_unsolvable_and_explains_the_dashed_line() -> None:
@@ -550,3 +556,30 @@ def test_the_room_run_gets_the_grown_checker_and_reports_the_true_clearance(monk
         assert room.min_clearance_m == pytest.approx(expected, abs=1e-3)
     with pytest.raises(ValueError, match="reference"):
         bench.run_real_bench(["smoothers_world"], ROBOT, 1, 21, reference=False, room_reference=True)
+
+
+@pytest.mark.parametrize("prefer_forward", [True, False])
+def test_the_metres_rolled_backwards_are_those_the_path_moves_against_its_heading(prefer_forward: bool) -> None:
+    """backwards_m (the table's ``back``) from the states' signed speed and arc length, checked against the geometry
+    of the poses alone: the steps that move against the heading (more than 120° from it: a roll change shifts the
+    sphere sideways, eq. 1, at 90°). depot#20 of the seed-0 draw at 40 a map rolls
+    almost all its 23 m backwards, whether the search held its shot back or not; forwards only, nothing."""
+    from lab.planning.real import runs
+
+    depot = load_map("maps/real/depot.yaml")
+    checker = FootprintReferee.for_robot(depot, ROBOT)
+    start, goal = (1.725, 7.575, 3.060120748362473), (24.225, 8.975, -2.3643296132075022)
+    problem = RealProblem("depot", 20, start, goal, math.dist(start[:2], goal[:2]), False)
+    for options, share in ((runs.PlannerOptions(prefer_forward=prefer_forward), 0.9),
+                           (runs.PlannerOptions(allow_reverse=False), 0.0)):
+        rec = runs.run_sphereplan(problem, depot, ROBOT, checker, options, 5.0)
+        result = runs.plan_path(depot, ROBOT, start, goal, options)
+        xy, yaw = result.states[:, :2], result.states[:, 2]
+        step = np.diff(xy, axis=0)
+        length = np.hypot(step[:, 0], step[:, 1])
+        against = step[:, 0] * np.cos(yaw[:-1]) + step[:, 1] * np.sin(yaw[:-1]) < -0.5 * length
+        geometric = float(length[against].sum())
+        assert rec.solved and rec.backwards_m == pytest.approx(geometric, rel=0.01, abs=1e-6)
+        assert rec.backwards_m >= share * rec.length_m
+        if share == 0.0:
+            assert rec.backwards_m == 0.0
