@@ -478,6 +478,25 @@ def test_summary_expansions_per_metre_is_the_median_over_solved_problems() -> No
     assert row[:end].split()[-1] == "25"
 
 
+def test_summary_back_is_the_share_of_metres_rolled_backwards_over_all_solved_paths() -> None:
+    """Column back: metres backwards ÷ length summed over the solved paths (not a median of shares); a row that
+    does not record them (a CSV from before the column) and an unsolved run are left out."""
+    from lab.planning.real.summary import format_real_table
+
+    records = [
+        replace(_rec(0, SPHEREPLAN, "solved", 0.2, length=10.0, clear=0.3), backwards_m=1.0),
+        replace(_rec(1, SPHEREPLAN, "solved", 0.1, length=2.0, clear=0.3), backwards_m=2.0),  # all backwards
+        replace(_rec(2, SPHEREPLAN, "solved", 0.1, length=3.0, clear=0.3)),  # not recorded: left out
+        replace(_rec(3, SPHEREPLAN, "timeout", 5.0), backwards_m=9.0),  # not solved: left out
+    ]
+    grid = OccupancyGrid.from_occupied(_room(), 0.05, name="m")
+    (s,) = summarise(records, {"m": FootprintReferee.for_robot(grid, ROBOT)}, False, {}, {})
+    assert s.backwards_share == pytest.approx(0.25)  # (1 + 2) / (10 + 2); the median of the shares would be 0.55
+    head, _, row = format_real_table([s]).splitlines()[:3]
+    end = head.index(" back") + len(" back")  # the columns are right-aligned under their heads
+    assert row[:end].split()[-1] == "0.25"
+
+
 def test_summary_loop_expansions_per_second_counts_the_search_loop_time_only() -> None:
     """Issue 21: expansions ÷ the compiled loop's time (what Nav2 reports), beside ÷ the whole planning time."""
     from lab.planning.real.summary import format_real_table
