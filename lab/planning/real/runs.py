@@ -177,12 +177,6 @@ def shift_of_rolls(rolls: np.ndarray, radius_m: float) -> float:
     return float(radius_m * np.abs(np.diff(np.concatenate(([0.0], held, [0.0])))).sum())
 
 
-def backwards_m(states: np.ndarray) -> float:
-    """Metres a sphereplan path (its ``states``, docs/contracts.md: column 4 the signed speed, 6 the arc length) rolls
-    backwards."""
-    return float(np.diff(states[:, 6])[states[1:, 4] < 0].sum())
-
-
 def _reverses(poses: np.ndarray) -> bool:
     """Does the path move against its heading anywhere (by more than a millimetre)?"""
     d = np.diff(poses[:, :2], axis=0)
@@ -264,7 +258,7 @@ def run_sphereplan(problem: RealProblem, grid: OccupancyGrid, robot: RobotProfil
                    min_clearance_m=checker.min_clearance(dense), reported_clearance_m=result.min_clearance_m,
                    reverses=bool((result.states[:, 4] < 0).any()), expansions=int(result.expansions),
                    message=message, search_loop_s=loop_s, shift_m=shift, first_shift_m=shift,
-                   backwards_m=backwards_m(result.states))
+                   backwards_m=float(result.extra.get("reverse_length_m", math.nan)))  # as the plan reports it
 
 
 def run_reference(problem: RealProblem, grid: OccupancyGrid, robot: RobotProfile, checker: FootprintReferee,

@@ -579,7 +579,7 @@ def test_the_room_run_gets_the_grown_checker_and_reports_the_true_clearance(monk
 
 @pytest.mark.parametrize("prefer_forward", [True, False])
 def test_the_metres_rolled_backwards_are_those_the_path_moves_against_its_heading(prefer_forward: bool) -> None:
-    """backwards_m (the table's ``back``) from the states' signed speed and arc length, checked against the geometry
+    """backwards_m (the table's ``back``), the plan's own ``extra.reverse_length_m``, checked against the geometry
     of the poses alone: the steps that move against the heading (more than 120° from it: a roll change shifts the
     sphere sideways, eq. 1, at 90°). depot#20 of the seed-0 draw at 40 a map rolls
     almost all its 23 m backwards, whether the search held its shot back or not; forwards only, nothing."""
