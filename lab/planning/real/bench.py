@@ -23,13 +23,12 @@ from lab.planning.real.runs import (
     with_reference_lengths,
 )
 from lab.planning.real.summary import MapSummary, summarise
-from lab.planning.referee import DEFAULT_REACH_M, FootprintReferee
+from lab.planning.referee import DEFAULT_REACH_M, FootprintReferee, grown_polygon
 from planner.errors import (
     PlanningError,
 )
 from planner.hybrid_astar.plan import plan_path, planner_for
 from planner.hybrid_astar.search import PlannerOptions
-from planner.maps.clearance import convex_turn
 from planner.occupancy import OccupancyGrid
 from planner.robot import RobotProfile
 from planner.termination import Termination
@@ -157,9 +156,10 @@ def check_room_reference(robot: RobotProfile, reference: bool) -> None:
     and a footprint that can be grown by a pad (a convex one: :func:`~lab.planning.referee.grown_polygon`)."""
     if not reference:
         raise ValueError("it runs with the reference (BIT*): leave the reference on")
-    poly = np.asarray(robot.footprint_polygon, dtype=np.float64)
-    if convex_turn(np.ascontiguousarray(poly[:, 0]), np.ascontiguousarray(poly[:, 1])) == 0:
-        raise ValueError(f"robot {robot.name!r}: only a convex footprint can be grown by the room (this one is not)")
+    try:
+        grown_polygon(robot.footprint_polygon, 0.0)  # refuses a footprint it cannot grow
+    except ValueError as exc:
+        raise ValueError(f"robot {robot.name!r}: {exc}") from None
 
 
 def _timed_reference(worker: ReferenceWorker, problem: RealProblem, grid: OccupancyGrid, robot: RobotProfile,
