@@ -585,3 +585,17 @@ def test_a_real_map_plan_is_the_same_at_every_door(client: httpx.Client, server:
                for a in (response.json(), reply["payload"], json.loads(out))]
     assert answers[0][mark]
     assert answers[1] == answers[0] and answers[2] == answers[0]
+
+
+def test_a_bad_prefer_forward_is_refused_naming_it_at_every_door(client: httpx.Client, server: Server,
+                                                                capsys: pytest.CaptureFixture[str]) -> None:
+    """The option whose meaning issue 21's twenty-second round widened: a value that is not true or false is refused
+    by name by the CLI (exit 2), HTTP (422) and Zenoh (a reply naming it), never taken as truthy."""
+    body = harness.plan_body(options={"prefer_forward": "no"})
+    response = client.post("/v1/plan", json=body)
+    assert response.status_code == 422 and response.json()["field"] == "options.prefer_forward", response.text[:300]
+    reply = zenoh_reply(server, "sphereplan/plan", body)
+    assert not reply["ok"] and reply["payload"]["field"] == "options.prefer_forward", reply
+    code, _, err = run(capsys, "plan", "--map", str(REPO / "maps" / "garage.yaml"), "--start", "12", "8.05", "0",
+                       "--goal", "12", "23.55", "3.1416", "--options", json.dumps(body["options"]))
+    assert code == 2 and "options.prefer_forward" in err, err
